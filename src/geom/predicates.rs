@@ -1,0 +1,298 @@
+//! Exact geometric predicates. The only place that decides signs.
+//!
+//! Input: points in f64 (local frame). Output: enums, never raw signs or tolerances.
+//! Invariants: every answer is exact for the given f64 inputs (Shewchuk's adaptive predicates
+//! through the `robust` crate); no epsilon appears here. Constructed points (intersections,
+//! snapped coordinates) are not handled here: callers shrink them conservatively and re-check
+//! them with these predicates.
+
+use glam::DVec2;
+
+/// Orientation of an ordered point triple.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Orientation {
+    /// Counter-clockwise: `c` lies left of the directed line `a -> b`.
+    Ccw,
+    /// Clockwise: `c` lies right of the directed line `a -> b`.
+    Cw,
+    /// The three points are collinear (or coincide).
+    Collinear,
+}
+
+#[inline]
+fn coord(p: DVec2) -> robust::Coord<f64> {
+    robust::Coord { x: p.x, y: p.y }
+}
+
+/// Exact orientation of `(a, b, c)`.
+#[inline]
+pub fn orient(a: DVec2, b: DVec2, c: DVec2) -> Orientation {
+    let d = robust::orient2d(coord(a), coord(b), coord(c));
+    if d > 0.0 {
+        Orientation::Ccw
+    } else if d < 0.0 {
+        Orientation::Cw
+    } else {
+        Orientation::Collinear
+    }
+}
+
+/// Where a point lies relative to a closed region.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Containment {
+    /// In the open interior.
+    Inside,
+    /// On the boundary.
+    Boundary,
+    /// In the open exterior.
+    Outside,
+}
+
+/// Exact test of `p` against a convex polygon given counter-clockwise (collinear vertices
+/// allowed, at least 3 vertices, non-zero area).
+pub fn point_in_convex(poly: &[DVec2], p: DVec2) -> Containment {
+    let mut on_edge = false;
+    for (i, &a) in poly.iter().enumerate() {
+        let b = poly[(i + 1) % poly.len()];
+        match orient(a, b, p) {
+            Orientation::Cw => return Containment::Outside,
+            Orientation::Collinear => on_edge = true,
+            Orientation::Ccw => {}
+        }
+    }
+    if on_edge {
+        Containment::Boundary
+    } else {
+        Containment::Inside
+    }
+}
+
+/// Exact test of `p` against a simple closed ring (either orientation), by crossing parity with
+/// exact orientation tests. The ring is given without its closing repeat.
+pub fn point_in_ring(ring: &[DVec2], p: DVec2) -> Containment {
+    let n = ring.len();
+    let mut inside = false;
+    for i in 0..n {
+        let a = ring[i];
+        let b = ring[(i + 1) % n];
+        if on_segment(a, b, p) {
+            return Containment::Boundary;
+        }
+        // Half-open rule on y: the edge counts when it straddles the horizontal line through p.
+        if (a.y > p.y) != (b.y > p.y) {
+            // The crossing is right of p when p lies on the side of the edge that faces -x.
+            let o = orient(a, b, p);
+            let upward = b.y > a.y;
+            if (upward && o == Orientation::Ccw) || (!upward && o == Orientation::Cw) {
+                inside = !inside;
+            }
+        }
+    }
+    if inside {
+        Containment::Inside
+    } else {
+        Containment::Outside
+    }
+}
+
+/// True when `p` lies on the closed segment `[a, b]`.
+pub fn on_segment(a: DVec2, b: DVec2, p: DVec2) -> bool {
+    orient(a, b, p) == Orientation::Collinear
+        && p.x >= a.x.min(b.x)
+        && p.x <= a.x.max(b.x)
+        && p.y >= a.y.min(b.y)
+        && p.y <= a.y.max(b.y)
+}
+
+/// How two closed segments meet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SegmentIntersection {
+    /// No common point.
+    Disjoint,
+    /// They cross at one point interior to both.
+    Proper,
+    /// They share at least one point, and an endpoint of one lies on the other (touching,
+    /// shared endpoints, or collinear overlap).
+    Touch,
+}
+
+/// Exact classification of closed segments `[a, b]` and `[c, d]`.
+pub fn segment_intersection(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> SegmentIntersection {
+    let o1 = orient(a, b, c);
+    let o2 = orient(a, b, d);
+    let o3 = orient(c, d, a);
+    let o4 = orient(c, d, b);
+    use Orientation::*;
+    let strict = |x: Orientation, y: Orientation| matches!((x, y), (Ccw, Cw) | (Cw, Ccw));
+    if strict(o1, o2) && strict(o3, o4) {
+        return SegmentIntersection::Proper;
+    }
+    if on_segment(a, b, c) || on_segment(a, b, d) || on_segment(c, d, a) || on_segment(c, d, b)
+    {
+        return SegmentIntersection::Touch;
+    }
+    SegmentIntersection::Disjoint
+}
+
+/// Exact orientation of a simple ring, read off the turn at its lowest-leftmost vertex, which is
+/// a strictly convex corner of any simple ring of non-zero area. `Collinear` for a degenerate
+/// ring (fewer than three distinct points, or all on one line through that corner).
+pub fn ring_orientation(ring: &[DVec2]) -> Orientation {
+    let n = ring.len();
+    if n < 3 {
+        return Orientation::Collinear;
+    }
+    // The lowest, then leftmost, vertex is a convex corner of a simple ring.
+    let mut k = 0;
+    for i in 1..n {
+        let (p, q) = (ring[i], ring[k]);
+        if p.y < q.y || (p.y == q.y && p.x < q.x) {
+            k = i;
+        }
+    }
+    // Skip neighbours that coincide with the corner.
+    let corner = ring[k];
+    let prev = (1..n)
+        .map(|s| ring[(k + n - s) % n])
+        .find(|&p| p != corner);
+    let next = (1..n).map(|s| ring[(k + s) % n]).find(|&p| p != corner);
+    match (prev, next) {
+        (Some(a), Some(c)) => orient(a, corner, c),
+        _ => Orientation::Collinear,
+    }
+}
+
+/// True when two convex polygons (counter-clockwise, non-degenerate) have disjoint interiors,
+/// decided exactly by looking for a separating edge line of either polygon.
+pub fn convex_interiors_disjoint(p: &[DVec2], q: &[DVec2]) -> bool {
+    fn separates(p: &[DVec2], q: &[DVec2]) -> bool {
+        (0..p.len()).any(|i| {
+            let (a, b) = (p[i], p[(i + 1) % p.len()]);
+            q.iter().all(|&x| orient(a, b, x) != Orientation::Ccw)
+        })
+    }
+    separates(p, q) || separates(q, p)
+}
+
+/// True when a polygon is convex and counter-clockwise with no collinear or repeated vertex.
+pub fn is_strictly_convex_ccw(poly: &[DVec2]) -> bool {
+    let n = poly.len();
+    n >= 3
+        && (0..n).all(|i| orient(poly[i], poly[(i + 1) % n], poly[(i + 2) % n]) == Orientation::Ccw)
+        && winding_turns_once(poly)
+}
+
+/// A polygon whose every corner turns left is convex only if it turns around once; a star
+/// pentagon turns left everywhere but twice around. Checks that the edge directions sweep a
+/// total angle of one turn by counting how often the edge direction crosses the +x axis.
+fn winding_turns_once(poly: &[DVec2]) -> bool {
+    let n = poly.len();
+    let mut crossings = 0;
+    for i in 0..n {
+        let d0 = poly[(i + 1) % n] - poly[i];
+        let d1 = poly[(i + 2) % n] - poly[(i + 1) % n];
+        // Direction angle passes from below the +x axis to at-or-above it.
+        let below = |d: DVec2| d.y < 0.0 || (d.y == 0.0 && d.x < 0.0);
+        if below(d0) && !below(d1) {
+            crossings += 1;
+        }
+    }
+    crossings == 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f64, y: f64) -> DVec2 {
+        DVec2::new(x, y)
+    }
+
+    #[test]
+    fn orientation_is_exact_near_degeneracy() {
+        // Classic failure case of naive evaluation: points almost on a line at large offsets.
+        let a = v(1.0e7 + 0.5, 1.0e7 + 0.5);
+        let b = v(1.0e7 + 12.0, 1.0e7 + 12.0);
+        let c = v(1.0e7 + 24.0, 1.0e7 + 24.0);
+        assert_eq!(orient(a, b, c), Orientation::Collinear);
+        let c2 = v(1.0e7 + 24.0, 1.0e7 + 24.000000001);
+        assert_eq!(orient(a, b, c2), Orientation::Ccw);
+        assert_eq!(orient(a, c2, b), Orientation::Cw);
+    }
+
+    #[test]
+    fn point_in_convex_classifies_all_three() {
+        let sq = [v(0.0, 0.0), v(2.0, 0.0), v(2.0, 2.0), v(0.0, 2.0)];
+        assert_eq!(point_in_convex(&sq, v(1.0, 1.0)), Containment::Inside);
+        assert_eq!(point_in_convex(&sq, v(2.0, 1.0)), Containment::Boundary);
+        assert_eq!(point_in_convex(&sq, v(0.0, 0.0)), Containment::Boundary);
+        assert_eq!(point_in_convex(&sq, v(2.0000001, 1.0)), Containment::Outside);
+    }
+
+    #[test]
+    fn point_in_ring_handles_vertices_at_query_height() {
+        // Non-convex ring with a vertex exactly at the query point's y.
+        let ring = [v(0.0, 0.0), v(4.0, 0.0), v(4.0, 4.0), v(2.0, 2.0), v(0.0, 4.0)];
+        assert_eq!(point_in_ring(&ring, v(1.0, 2.0)), Containment::Inside);
+        assert_eq!(point_in_ring(&ring, v(2.0, 3.0)), Containment::Outside);
+        assert_eq!(point_in_ring(&ring, v(2.0, 2.0)), Containment::Boundary);
+        assert_eq!(point_in_ring(&ring, v(5.0, 2.0)), Containment::Outside);
+        assert_eq!(point_in_ring(&ring, v(-1.0, 2.0)), Containment::Outside);
+        let cw: Vec<_> = ring.iter().rev().copied().collect();
+        assert_eq!(point_in_ring(&cw, v(1.0, 2.0)), Containment::Inside);
+    }
+
+    #[test]
+    fn segment_intersection_cases() {
+        use SegmentIntersection::*;
+        assert_eq!(
+            segment_intersection(v(0., 0.), v(2., 2.), v(0., 2.), v(2., 0.)),
+            Proper
+        );
+        assert_eq!(
+            segment_intersection(v(0., 0.), v(2., 0.), v(1., 0.), v(1., 5.)),
+            Touch
+        );
+        assert_eq!(
+            segment_intersection(v(0., 0.), v(2., 0.), v(1., 0.), v(3., 0.)),
+            Touch
+        );
+        assert_eq!(
+            segment_intersection(v(0., 0.), v(2., 0.), v(2.5, 0.), v(3., 0.)),
+            Disjoint
+        );
+        assert_eq!(
+            segment_intersection(v(0., 0.), v(2., 0.), v(1., 1e-300), v(1., 5.)),
+            Disjoint
+        );
+    }
+
+    #[test]
+    fn ring_orientation_and_convexity() {
+        let sq = [v(0.0, 0.0), v(2.0, 0.0), v(2.0, 2.0), v(0.0, 2.0)];
+        assert_eq!(ring_orientation(&sq), Orientation::Ccw);
+        let rev: Vec<_> = sq.iter().rev().copied().collect();
+        assert_eq!(ring_orientation(&rev), Orientation::Cw);
+        assert!(is_strictly_convex_ccw(&sq));
+        assert!(!is_strictly_convex_ccw(&rev));
+        let with_collinear = [v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.0), v(2.0, 2.0)];
+        assert!(!is_strictly_convex_ccw(&with_collinear));
+        // A pentagram turns left at every corner but is not convex.
+        let star: Vec<DVec2> = (0..5)
+            .map(|k| {
+                let t = std::f64::consts::TAU * (2 * k) as f64 / 5.0;
+                v(t.cos(), t.sin())
+            })
+            .collect();
+        assert!(!is_strictly_convex_ccw(&star));
+    }
+
+    #[test]
+    fn convex_disjointness() {
+        let a = [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
+        let b = [v(1.0, 0.0), v(2.0, 0.0), v(2.0, 1.0), v(1.0, 1.0)];
+        let c = [v(0.5, 0.5), v(1.5, 0.5), v(1.5, 1.5)];
+        assert!(convex_interiors_disjoint(&a, &b));
+        assert!(!convex_interiors_disjoint(&a, &c));
+    }
+}

@@ -1,0 +1,22 @@
+//! vocc: virtual occluders for city models.
+//!
+//! Input: city models (GeoJSON footprints with heights, OBJ meshes, CityJSON). Output, in later
+//! stages: per view cell, at most 10 conservative virtual occluders packed at 5 bytes each, and a
+//! runtime culler that builds the cell's potentially visible set from them.
+//!
+//! Module wings:
+//! - [`scene`]: readers and the 2.5D blocker model (feature `bake`);
+//! - [`geom`]: the exact predicates (feature `bake`);
+//! - [`runtime`]: the store format and culler core, which builds without the geometry stack
+//!   (`--no-default-features`) so an engine can embed it.
+//!
+//! Invariant: every occlusion decision is conservative; see `ARCHITECTURE.md`.
+
+#![forbid(unsafe_code)]
+
+pub mod runtime;
+
+#[cfg(feature = "bake")]
+pub mod geom;
+#[cfg(feature = "bake")]
+pub mod scene;

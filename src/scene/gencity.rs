@@ -1,0 +1,1 @@
+//! PLACEHOLDER: filled by the gen-city helper.

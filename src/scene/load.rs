@@ -1,0 +1,289 @@
+//! Loading: files in, a local-frame scene with blockers out.
+//!
+//! Input: file paths in order, and reader options. Output: a [`Scene`].
+//! Stages, each timed: read (format detection and parsing), localize (one origin for the whole
+//! scene: the bounding-box minimum rounded down to 1 km, then subtraction in f64), footprints
+//! (ring repair and convex decomposition), meshes (solid extraction).
+//! Invariants: object indices follow input order; a failed file fails the whole load (no partial
+//! scene); per-object work runs in parallel but results are collected in index order, so the
+//! scene is identical for any thread count.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+use super::error::{LoadError, LoadErrorKind, Location};
+use super::{
+    cityjson, decompose, footprint, geojson, obj, solid, Aabb3, Blocker, FileRead, FileStats,
+    Footprint, NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene, SceneReport, Shape,
+};
+
+/// Size of the grid the scene origin snaps to, metres.
+pub const ORIGIN_SNAP_M: f64 = 1000.0;
+
+/// Reads one file, choosing the reader from its extension and content.
+pub fn read_file(path: &Path, opts: &ReadOptions) -> Result<(FileRead, &'static str), LoadError> {
+    let err = |location, kind| LoadError::new(path, location, kind);
+    let bytes =
+        std::fs::read(path).map_err(|e| err(Location::File, LoadErrorKind::Io(e.to_string())))?;
+    if bytes.iter().all(|b| b.is_ascii_whitespace()) {
+        return Err(err(Location::File, LoadErrorKind::Empty));
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext == "obj" {
+        return Ok((obj::read_obj(path, &bytes, opts)?, "OBJ"));
+    }
+    if !matches!(ext.as_str(), "json" | "geojson" | "cityjson") {
+        return Err(err(Location::File, LoadErrorKind::UnknownFormat));
+    }
+    let value: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| {
+        err(
+            Location::Line {
+                line: e.line(),
+                column: Some(e.column()),
+            },
+            LoadErrorKind::MalformedJson(e.to_string()),
+        )
+    })?;
+    match value.get("type").and_then(|t| t.as_str()) {
+        Some("FeatureCollection") | Some("Feature") => {
+            Ok((geojson::read_geojson(path, &value, opts)?, "GeoJSON"))
+        }
+        Some("CityJSON") => Ok((cityjson::read_cityjson(path, &value, opts)?, "CityJSON")),
+        other => Err(err(
+            Location::File,
+            LoadErrorKind::Malformed {
+                format: "JSON",
+                message: format!(
+                    "top-level \"type\" is {}, expected \"FeatureCollection\", \"Feature\" or \"CityJSON\"",
+                    other.map(|s| format!("{s:?}")).unwrap_or_else(|| "missing".into())
+                ),
+            },
+        )),
+    }
+}
+
+/// Loads files into one scene.
+pub fn load(paths: &[PathBuf], opts: &ReadOptions) -> Result<Scene, LoadError> {
+    let mut report = SceneReport::default();
+    let t = Instant::now();
+    let reads: Vec<(FileRead, &'static str)> = paths
+        .par_iter()
+        .map(|p| read_file(p, opts))
+        .collect::<Result<_, _>>()?;
+    report.timings.push(("read", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let mut raw: Vec<(u32, RawObject)> = Vec::new();
+    for (fi, ((read, format), path)) in reads.into_iter().zip(paths).enumerate() {
+        report.files.push(FileStats {
+            path: path.clone(),
+            format,
+            objects: read.objects.len(),
+            skipped: read.skipped.len(),
+            other_types: read.other_types,
+        });
+        report
+            .skipped
+            .extend(read.skipped.into_iter().map(|s| (fi as u32, s)));
+        raw.extend(read.objects.into_iter().map(|o| (fi as u32, o)));
+    }
+    if raw.is_empty() {
+        let path = paths.first().cloned().unwrap_or_default();
+        return Err(LoadError::new(path, Location::File, LoadErrorKind::NoObjects));
+    }
+    let world = raw
+        .par_iter()
+        .map(|(_, o)| shape_bbox(&o.shape))
+        .reduce(|| Aabb3::EMPTY, Aabb3::union);
+    let origin = (world.min / ORIGIN_SNAP_M).floor() * ORIGIN_SNAP_M;
+    raw.par_iter_mut()
+        .for_each(|(_, o)| translate(&mut o.shape, -origin));
+    report.timings.push(("localize", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let built: Vec<Built> = raw
+        .into_par_iter()
+        .enumerate()
+        .map(|(i, (file, o))| build_object(i as u32, file, o))
+        .collect();
+    report
+        .timings
+        .push(("footprints and meshes", t.elapsed().as_secs_f64()));
+
+    let mut objects = Vec::with_capacity(built.len());
+    let mut blockers = Vec::new();
+    for b in built {
+        let idx = b.object.index;
+        report
+            .repairs
+            .extend(b.repairs.into_iter().map(|(p, r, k)| (idx, p, r, k)));
+        report
+            .no_blocker
+            .extend(b.no_blocker.into_iter().map(|n| (idx, n)));
+        blockers.extend(b.blockers);
+        objects.push(b.object);
+    }
+    Ok(Scene {
+        origin,
+        files: paths.to_vec(),
+        objects,
+        blockers,
+        report,
+    })
+}
+
+struct Built {
+    object: Object,
+    blockers: Vec<Blocker>,
+    repairs: Vec<(usize, usize, RingRepair)>,
+    no_blocker: Vec<NoBlocker>,
+}
+
+fn build_object(index: u32, file: u32, raw: RawObject) -> Built {
+    let mut repairs = Vec::new();
+    let mut no_blocker = Vec::new();
+    let mut blockers = Vec::new();
+    let shape = match raw.shape {
+        Shape::Footprint(fp) => {
+            let mut polygons = Vec::with_capacity(fp.polygons.len());
+            for (pi, rings) in fp.polygons.into_iter().enumerate() {
+                let fixed = footprint::repair_polygon(&rings);
+                repairs.extend(fixed.repairs.iter().map(|&(r, k)| (pi, r, k)));
+                match fixed.result {
+                    Err((ring, why)) => {
+                        no_blocker.push(NoBlocker::InvalidRing {
+                            polygon: pi,
+                            ring,
+                            why,
+                        });
+                        polygons.push(rings);
+                    }
+                    Ok(valid) => {
+                        if fp.top > fp.base {
+                            match decompose::convex_pieces(&valid) {
+                                Ok(pieces) => blockers.extend(pieces.into_iter().map(|polygon| {
+                                    Blocker {
+                                        object: index,
+                                        polygon,
+                                        base: fp.base,
+                                        top: fp.top,
+                                    }
+                                })),
+                                Err(e) => no_blocker.push(NoBlocker::Triangulation(e.to_string())),
+                            }
+                        }
+                        polygons.push(valid);
+                    }
+                }
+            }
+            if fp.top <= fp.base {
+                no_blocker.push(NoBlocker::NoHeight);
+            }
+            Shape::Footprint(Footprint {
+                polygons,
+                base: fp.base,
+                top: fp.top,
+            })
+        }
+        Shape::Mesh(mesh) => {
+            match solid::solid_pieces(&mesh) {
+                Ok(pieces) => blockers.extend(pieces.into_iter().map(|p| Blocker {
+                    object: index,
+                    polygon: p.polygon,
+                    base: p.base,
+                    top: p.top,
+                })),
+                Err(why) => no_blocker.push(why),
+            }
+            Shape::Mesh(mesh)
+        }
+    };
+    Built {
+        object: Object {
+            index,
+            file,
+            name: raw.name,
+            location: raw.location,
+            bbox: shape_bbox(&shape),
+            cost: shape_cost(&shape),
+            shape,
+        },
+        blockers,
+        repairs,
+        no_blocker,
+    }
+}
+
+/// Bounding box of a shape in its own coordinates.
+pub fn shape_bbox(shape: &Shape) -> Aabb3 {
+    let mut b = Aabb3::EMPTY;
+    match shape {
+        Shape::Footprint(fp) => {
+            for p in fp.polygons.iter().flatten().flatten() {
+                b.include(DVec3::new(p.x, p.y, fp.base));
+                b.include(DVec3::new(p.x, p.y, fp.top));
+            }
+        }
+        Shape::Mesh(m) => {
+            // Only vertices that faces use: stray vertices are not geometry.
+            for f in &m.faces {
+                for &i in f.rings.iter().flatten() {
+                    if let Some(&v) = m.vertices.get(i as usize) {
+                        b.include(v);
+                    }
+                }
+            }
+        }
+    }
+    b
+}
+
+/// Triangle count. A polygon with V vertices over all its rings and H holes triangulates into
+/// V + 2H - 2 triangles; a footprint prism has two such caps and two triangles per wall edge.
+pub fn shape_cost(shape: &Shape) -> u64 {
+    let poly = |v: usize, h: usize| (v + 2 * h).saturating_sub(2) as u64;
+    match shape {
+        Shape::Footprint(fp) => fp
+            .polygons
+            .iter()
+            .map(|rings| {
+                let v: usize = rings.iter().map(|r| r.len()).sum();
+                let h = rings.len().saturating_sub(1);
+                2 * poly(v, h) + 2 * v as u64
+            })
+            .sum(),
+        Shape::Mesh(m) => m
+            .faces
+            .iter()
+            .map(|f| {
+                let v: usize = f.rings.iter().map(|r| r.len()).sum();
+                poly(v, f.rings.len().saturating_sub(1))
+            })
+            .sum(),
+    }
+}
+
+fn translate(shape: &mut Shape, d: DVec3) {
+    match shape {
+        Shape::Footprint(fp) => {
+            let d2 = DVec2::new(d.x, d.y);
+            for p in fp.polygons.iter_mut().flatten().flatten() {
+                *p += d2;
+            }
+            fp.base += d.z;
+            fp.top += d.z;
+        }
+        Shape::Mesh(m) => {
+            for v in &mut m.vertices {
+                *v += d;
+            }
+        }
+    }
+}
