@@ -1,1 +1,263 @@
-fn main() {}
+//! The `vocc` command line: a thin layer over the library.
+//!
+//! Input: command-line arguments. Output: reports on stdout, files where asked, errors on stderr
+//! with a non-zero exit status. Invariant: no geometry here; every decision is the library's.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+
+use vocc::scene::{self, summary, ReadOptions};
+
+#[derive(Parser)]
+#[command(name = "vocc", version, about = "Virtual occluders for city models")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Load scene files and report objects, blockers, convex pieces, repairs and timings.
+    Info {
+        /// Scene files: GeoJSON footprints, CityJSON (0.8, 1.x, 2.0) or OBJ.
+        #[arg(required = true)]
+        scene: Vec<PathBuf>,
+        #[command(flatten)]
+        read: ReadArgs,
+        /// Print the full report as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Write a deterministic procedural city (GeoJSON footprints, attribute `height`).
+    GenCity {
+        /// Number of buildings.
+        #[arg(long)]
+        buildings: usize,
+        /// Random seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output GeoJSON file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+/// Options of the scene readers.
+#[derive(Args)]
+struct ReadArgs {
+    /// GeoJSON: attribute with the building height above its base, metres.
+    #[arg(long, value_name = "NAME")]
+    height_attr: Option<String>,
+    /// GeoJSON: attribute with the base elevation, metres (default: base at 0).
+    #[arg(long, value_name = "NAME")]
+    base_attr: Option<String>,
+    /// GeoJSON: attribute with the number of storeys, used when the height is missing.
+    #[arg(long, value_name = "NAME")]
+    levels_attr: Option<String>,
+    /// Metres per storey for --levels-attr.
+    #[arg(long, default_value_t = 3.0, value_name = "M")]
+    storey_height: f64,
+    /// CityJSON: level of detail to read (default: the highest each object has).
+    #[arg(long)]
+    lod: Option<String>,
+}
+
+impl ReadArgs {
+    fn options(&self) -> ReadOptions {
+        ReadOptions {
+            height_attr: self.height_attr.clone(),
+            base_attr: self.base_attr.clone(),
+            levels_attr: self.levels_attr.clone(),
+            storey_height: self.storey_height,
+            lod: self.lod.clone(),
+        }
+    }
+}
+
+fn main() {
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Info { scene, read, json } => {
+            let s = scene::load(&scene, &read.options())?;
+            let sum = summary::summarize(&s);
+            let mut out = std::io::stdout().lock();
+            if json {
+                serde_json::to_writer_pretty(&mut out, &sum)?;
+                writeln!(out)?;
+            } else {
+                print_summary(&mut out, &sum)?;
+            }
+            Ok(())
+        }
+        Command::GenCity {
+            buildings,
+            seed,
+            output,
+        } => {
+            let t = Instant::now();
+            let city = scene::gencity::generate(&scene::gencity::CityParams { buildings, seed });
+            write_atomically(&output, |w| scene::gencity::write_geojson(w, &city))?;
+            eprintln!(
+                "wrote {} buildings to {} in {:.2} s",
+                city.len(),
+                output.display(),
+                t.elapsed().as_secs_f64()
+            );
+            Ok(())
+        }
+    }
+}
+
+/// Writes through a temporary file in the same folder, then renames, so an interrupted run never
+/// leaves a complete-looking output.
+fn write_atomically(
+    path: &std::path::Path,
+    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+    let tmp = match dir {
+        Some(d) => d.join(format!(
+            ".{}.tmp",
+            path.file_name().unwrap_or_default().to_string_lossy()
+        )),
+        None => PathBuf::from(format!(
+            ".{}.tmp",
+            path.file_name().unwrap_or_default().to_string_lossy()
+        )),
+    };
+    let result = (|| -> Result<()> {
+        let f = std::fs::File::create(&tmp)
+            .with_context(|| format!("cannot create {}", tmp.display()))?;
+        let mut w = std::io::BufWriter::new(f);
+        write(&mut w).with_context(|| format!("cannot write {}", tmp.display()))?;
+        let f = w.into_inner().map_err(|e| e.into_error())?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+            .with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))?;
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<()> {
+    const LIST: usize = 10;
+    for f in &s.files {
+        write!(
+            out,
+            "file {} ({}): {} objects, {} skipped",
+            f.path, f.format, f.objects, f.skipped
+        )?;
+        if !f.other_types.is_empty() {
+            let o: Vec<String> = f
+                .other_types
+                .iter()
+                .map(|(k, v)| format!("{k} {v}"))
+                .collect();
+            write!(out, "; other city objects not read: {}", o.join(", "))?;
+        }
+        writeln!(out)?;
+    }
+    writeln!(
+        out,
+        "objects: {} ({} footprints, {} meshes, {} triangles)",
+        s.objects, s.footprint_objects, s.mesh_objects, s.triangles
+    )?;
+    writeln!(
+        out,
+        "blockers: {} objects gave blockers, {} gave none",
+        s.blocker_objects, s.no_blocker_objects
+    )?;
+    writeln!(
+        out,
+        "convex pieces: {} ({:.2} per blocker object)",
+        s.convex_pieces,
+        s.convex_pieces as f64 / s.blocker_objects.max(1) as f64
+    )?;
+    let st = |x: &summary::Stats| {
+        format!(
+            "min {:.1}, median {:.1}, mean {:.1}, p90 {:.1}, max {:.1}",
+            x.min, x.p50, x.mean, x.p90, x.max
+        )
+    };
+    writeln!(out, "object heights (m): {}", st(&s.heights))?;
+    writeln!(out, "blocker heights (m): {}", st(&s.blocker_heights))?;
+    writeln!(
+        out,
+        "origin (world): {:.3}, {:.3}, {:.3}",
+        s.origin[0], s.origin[1], s.origin[2]
+    )?;
+    writeln!(
+        out,
+        "extent (local): x {:.2}..{:.2}, y {:.2}..{:.2}, z {:.2}..{:.2} ({:.0} x {:.0} x {:.1} m)",
+        s.extent_min[0],
+        s.extent_max[0],
+        s.extent_min[1],
+        s.extent_max[1],
+        s.extent_min[2],
+        s.extent_max[2],
+        s.extent_max[0] - s.extent_min[0],
+        s.extent_max[1] - s.extent_min[1],
+        s.extent_max[2] - s.extent_min[2]
+    )?;
+    let section = |out: &mut dyn Write,
+                   title: &str,
+                   counts: &std::collections::BTreeMap<String, usize>,
+                   entries: &[summary::Entry]|
+     -> std::io::Result<()> {
+        if entries.is_empty() {
+            return writeln!(out, "{title}: none");
+        }
+        writeln!(out, "{title}: {}", entries.len())?;
+        for (k, v) in counts {
+            writeln!(out, "  {v:>6}  {k}")?;
+        }
+        for e in entries.iter().take(LIST) {
+            let obj = e.object.map(|i| format!("#{i} ")).unwrap_or_default();
+            writeln!(
+                out,
+                "    {obj}{:?} ({}, {}): {}",
+                e.name, e.file, e.location, e.reason
+            )?;
+        }
+        if entries.len() > LIST {
+            writeln!(
+                out,
+                "    ... {} more (--json lists all)",
+                entries.len() - LIST
+            )?;
+        }
+        Ok(())
+    };
+    section(out, "skipped objects", &s.skipped_by_reason, &s.skipped)?;
+    section(
+        out,
+        &format!("repaired rings ({} objects)", s.repaired_objects),
+        &s.repaired_rings_by_kind,
+        &s.repaired,
+    )?;
+    section(
+        out,
+        "geometry that gave no blocker",
+        &s.no_blocker_by_reason,
+        &s.no_blocker,
+    )?;
+    let t: Vec<String> = s
+        .timings
+        .iter()
+        .map(|(k, v)| format!("{k} {:.3} s", v))
+        .collect();
+    writeln!(out, "timings: {}", t.join(", "))
+}

@@ -127,8 +127,7 @@ pub fn segment_intersection(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> SegmentIn
     if strict(o1, o2) && strict(o3, o4) {
         return SegmentIntersection::Proper;
     }
-    if on_segment(a, b, c) || on_segment(a, b, d) || on_segment(c, d, a) || on_segment(c, d, b)
-    {
+    if on_segment(a, b, c) || on_segment(a, b, d) || on_segment(c, d, a) || on_segment(c, d, b) {
         return SegmentIntersection::Touch;
     }
     SegmentIntersection::Disjoint
@@ -152,9 +151,7 @@ pub fn ring_orientation(ring: &[DVec2]) -> Orientation {
     }
     // Skip neighbours that coincide with the corner.
     let corner = ring[k];
-    let prev = (1..n)
-        .map(|s| ring[(k + n - s) % n])
-        .find(|&p| p != corner);
+    let prev = (1..n).map(|s| ring[(k + n - s) % n]).find(|&p| p != corner);
     let next = (1..n).map(|s| ring[(k + s) % n]).find(|&p| p != corner);
     match (prev, next) {
         (Some(a), Some(c)) => orient(a, corner, c),
@@ -226,13 +223,22 @@ mod tests {
         assert_eq!(point_in_convex(&sq, v(1.0, 1.0)), Containment::Inside);
         assert_eq!(point_in_convex(&sq, v(2.0, 1.0)), Containment::Boundary);
         assert_eq!(point_in_convex(&sq, v(0.0, 0.0)), Containment::Boundary);
-        assert_eq!(point_in_convex(&sq, v(2.0000001, 1.0)), Containment::Outside);
+        assert_eq!(
+            point_in_convex(&sq, v(2.0000001, 1.0)),
+            Containment::Outside
+        );
     }
 
     #[test]
     fn point_in_ring_handles_vertices_at_query_height() {
         // Non-convex ring with a vertex exactly at the query point's y.
-        let ring = [v(0.0, 0.0), v(4.0, 0.0), v(4.0, 4.0), v(2.0, 2.0), v(0.0, 4.0)];
+        let ring = [
+            v(0.0, 0.0),
+            v(4.0, 0.0),
+            v(4.0, 4.0),
+            v(2.0, 2.0),
+            v(0.0, 4.0),
+        ];
         assert_eq!(point_in_ring(&ring, v(1.0, 2.0)), Containment::Inside);
         assert_eq!(point_in_ring(&ring, v(2.0, 3.0)), Containment::Outside);
         assert_eq!(point_in_ring(&ring, v(2.0, 2.0)), Containment::Boundary);

@@ -26,7 +26,10 @@ impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Location::File => write!(f, "file"),
-            Location::Line { line, column: Some(c) } => write!(f, "line {line}, column {c}"),
+            Location::Line {
+                line,
+                column: Some(c),
+            } => write!(f, "line {line}, column {c}"),
             Location::Line { line, column: None } => write!(f, "line {line}"),
             Location::Feature(i) => write!(f, "feature {i}"),
             Location::CityObject(id) => write!(f, "city object {id:?}"),

@@ -96,7 +96,11 @@ pub fn load(paths: &[PathBuf], opts: &ReadOptions) -> Result<Scene, LoadError> {
     }
     if raw.is_empty() {
         let path = paths.first().cloned().unwrap_or_default();
-        return Err(LoadError::new(path, Location::File, LoadErrorKind::NoObjects));
+        return Err(LoadError::new(
+            path,
+            Location::File,
+            LoadErrorKind::NoObjects,
+        ));
     }
     let world = raw
         .par_iter()
@@ -168,14 +172,14 @@ fn build_object(index: u32, file: u32, raw: RawObject) -> Built {
                     Ok(valid) => {
                         if fp.top > fp.base {
                             match decompose::convex_pieces(&valid) {
-                                Ok(pieces) => blockers.extend(pieces.into_iter().map(|polygon| {
-                                    Blocker {
+                                Ok(pieces) => {
+                                    blockers.extend(pieces.into_iter().map(|polygon| Blocker {
                                         object: index,
                                         polygon,
                                         base: fp.base,
                                         top: fp.top,
-                                    }
-                                })),
+                                    }))
+                                }
                                 Err(e) => no_blocker.push(NoBlocker::Triangulation(e.to_string())),
                             }
                         }

@@ -20,6 +20,7 @@ pub mod geojson;
 pub mod load;
 pub mod obj;
 pub mod solid;
+pub mod summary;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -58,7 +59,7 @@ impl Default for ReadOptions {
     }
 }
 
-/// A ring as read: open (no repeated closing vertex is required), any orientation.
+/// A ring as read, any orientation. GeoJSON rings repeat their first point at the end.
 pub type Ring = Vec<DVec2>;
 
 /// A footprint: polygons (ring 0 the exterior, the rest holes) extruded from `base` to `top`.
@@ -105,6 +106,8 @@ pub struct RawObject {
 pub enum SkipReason {
     /// No height attribute and no storey count to fall back on.
     NoHeight,
+    /// A base attribute was asked for and this object has no value for it.
+    NoBase,
     /// The geometry is `null` or empty.
     EmptyGeometry,
     /// A geometry type that has no area (Point, LineString, ...).
@@ -119,6 +122,7 @@ impl fmt::Display for SkipReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SkipReason::NoHeight => write!(f, "no height attribute and no storey count"),
+            SkipReason::NoBase => write!(f, "no value for the base attribute"),
             SkipReason::EmptyGeometry => write!(f, "empty or null geometry"),
             SkipReason::NotAreal(t) => write!(f, "geometry type {t} has no area"),
             SkipReason::NoGeometryAtLod(l) => write!(f, "no geometry at LoD {l}"),

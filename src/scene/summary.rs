@@ -1,0 +1,212 @@
+//! What `vocc info` reports about a loaded scene.
+//!
+//! Input: a [`Scene`]. Output: a serializable summary: counts of objects, objects that gave
+//! blockers and convex pieces; height statistics; every skipped, repaired or blocker-less object
+//! with its reason (and counts per reason); extent and origin; stage timings.
+//! Invariant: a pure function of the scene; the CLI only formats it.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use super::{Location, Scene, Shape};
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub files: Vec<FileSummary>,
+    pub objects: usize,
+    /// Objects that gave at least one blocker.
+    pub blocker_objects: usize,
+    /// Objects that gave none (they stay occludees).
+    pub no_blocker_objects: usize,
+    pub convex_pieces: usize,
+    /// Footprint objects and mesh objects.
+    pub footprint_objects: usize,
+    pub mesh_objects: usize,
+    /// Total triangle cost of all objects.
+    pub triangles: u64,
+    /// Object heights (bounding-box top minus bottom), metres.
+    pub heights: Stats,
+    /// Blocker piece heights (top minus base), metres.
+    pub blocker_heights: Stats,
+    /// World coordinates of the local origin.
+    pub origin: [f64; 3],
+    /// Local extent, min and max corners.
+    pub extent_min: [f64; 3],
+    pub extent_max: [f64; 3],
+    pub skipped_by_reason: BTreeMap<String, usize>,
+    pub repaired_rings_by_kind: BTreeMap<String, usize>,
+    pub repaired_objects: usize,
+    pub no_blocker_by_reason: BTreeMap<String, usize>,
+    pub skipped: Vec<Entry>,
+    pub repaired: Vec<Entry>,
+    pub no_blocker: Vec<Entry>,
+    /// Seconds per stage.
+    pub timings: Vec<(String, f64)>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct FileSummary {
+    pub path: String,
+    pub format: String,
+    pub objects: usize,
+    pub skipped: usize,
+    /// Other city object types, skipped and counted.
+    pub other_types: BTreeMap<String, usize>,
+}
+
+/// One reported object.
+#[derive(Clone, Debug, Serialize)]
+pub struct Entry {
+    pub file: String,
+    /// Object index, when the object made it into the scene.
+    pub object: Option<u32>,
+    pub name: String,
+    pub location: String,
+    pub reason: String,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Stats {
+    pub count: usize,
+    pub min: f64,
+    pub p50: f64,
+    pub mean: f64,
+    pub p90: f64,
+    pub max: f64,
+}
+
+impl Stats {
+    pub fn of(mut v: Vec<f64>) -> Stats {
+        if v.is_empty() {
+            return Stats::default();
+        }
+        v.sort_by(f64::total_cmp);
+        let q = |f: f64| v[((v.len() - 1) as f64 * f).round() as usize];
+        Stats {
+            count: v.len(),
+            min: v[0],
+            p50: q(0.5),
+            mean: v.iter().sum::<f64>() / v.len() as f64,
+            p90: q(0.9),
+            max: v[v.len() - 1],
+        }
+    }
+}
+
+fn loc_str(l: &Location) -> String {
+    l.to_string()
+}
+
+/// Summarizes a scene.
+pub fn summarize(scene: &Scene) -> Summary {
+    let file_name = |i: u32| scene.files[i as usize].display().to_string();
+    let obj_entry = |idx: u32, reason: String| {
+        let o = &scene.objects[idx as usize];
+        Entry {
+            file: file_name(o.file),
+            object: Some(idx),
+            name: o.name.clone(),
+            location: loc_str(&o.location),
+            reason,
+        }
+    };
+    let mut has_blocker = vec![false; scene.objects.len()];
+    for b in &scene.blockers {
+        has_blocker[b.object as usize] = true;
+    }
+    let blocker_objects = has_blocker.iter().filter(|&&b| b).count();
+
+    let mut skipped_by_reason = BTreeMap::new();
+    let skipped: Vec<Entry> = scene
+        .report
+        .skipped
+        .iter()
+        .map(|(fi, s)| {
+            *skipped_by_reason.entry(s.reason.to_string()).or_insert(0) += 1;
+            Entry {
+                file: file_name(*fi),
+                object: None,
+                name: s.name.clone(),
+                location: loc_str(&s.location),
+                reason: s.reason.to_string(),
+            }
+        })
+        .collect();
+    let mut repaired_rings_by_kind = BTreeMap::new();
+    let mut repaired = Vec::new();
+    for &(idx, poly, ring, kind) in &scene.report.repairs {
+        *repaired_rings_by_kind.entry(kind.to_string()).or_insert(0) += 1;
+        repaired.push(obj_entry(
+            idx,
+            format!("polygon {poly} ring {ring}: {kind}"),
+        ));
+    }
+    let mut repaired_ids: Vec<u32> = scene.report.repairs.iter().map(|r| r.0).collect();
+    repaired_ids.dedup();
+    let mut no_blocker_by_reason = BTreeMap::new();
+    let no_blocker: Vec<Entry> = scene
+        .report
+        .no_blocker
+        .iter()
+        .map(|(idx, why)| {
+            *no_blocker_by_reason.entry(why.label()).or_insert(0) += 1;
+            obj_entry(*idx, why.to_string())
+        })
+        .collect();
+
+    let ext = scene.extent();
+    Summary {
+        files: scene
+            .report
+            .files
+            .iter()
+            .map(|f| FileSummary {
+                path: f.path.display().to_string(),
+                format: f.format.to_string(),
+                objects: f.objects,
+                skipped: f.skipped,
+                other_types: f.other_types.clone(),
+            })
+            .collect(),
+        objects: scene.objects.len(),
+        blocker_objects,
+        no_blocker_objects: scene.objects.len() - blocker_objects,
+        convex_pieces: scene.blockers.len(),
+        footprint_objects: scene
+            .objects
+            .iter()
+            .filter(|o| matches!(o.shape, Shape::Footprint(_)))
+            .count(),
+        mesh_objects: scene
+            .objects
+            .iter()
+            .filter(|o| matches!(o.shape, Shape::Mesh(_)))
+            .count(),
+        triangles: scene.objects.iter().map(|o| o.cost).sum(),
+        heights: Stats::of(
+            scene
+                .objects
+                .iter()
+                .map(|o| o.bbox.max.z - o.bbox.min.z)
+                .collect(),
+        ),
+        blocker_heights: Stats::of(scene.blockers.iter().map(|b| b.top - b.base).collect()),
+        origin: scene.origin.to_array(),
+        extent_min: ext.min.to_array(),
+        extent_max: ext.max.to_array(),
+        skipped_by_reason,
+        repaired_rings_by_kind,
+        repaired_objects: repaired_ids.len(),
+        no_blocker_by_reason,
+        skipped,
+        repaired,
+        no_blocker,
+        timings: scene
+            .report
+            .timings
+            .iter()
+            .map(|(s, t)| (s.to_string(), *t))
+            .collect(),
+    }
+}
