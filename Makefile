@@ -1,0 +1,30 @@
+# vocc: the common tasks. Each target installs nothing beyond the Rust toolchain and crates.io.
+
+CARGO ?= cargo
+DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
+
+.PHONY: build test demo bench lint fresh-clone
+
+build:
+	$(CARGO) build --release
+
+# The whole test suite, as CI runs it: all tests, the embeddable core without the geometry stack,
+# formatting.
+test:
+	$(CARGO) test --locked
+	$(CARGO) test --locked --lib --no-default-features
+	$(CARGO) fmt --all -- --check
+
+# The main job on the bundled example.
+demo:
+	$(CARGO) run --locked --release -- info $(DEMO_SCENE) --height-attr HAUTEUR
+
+bench:
+	$(CARGO) bench --locked
+
+lint:
+	$(CARGO) clippy --all-targets -- -D warnings
+
+# Clones the committed main into a temporary folder and runs the README's two commands there.
+fresh-clone:
+	tools/fresh-clone.sh
