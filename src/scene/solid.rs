@@ -16,7 +16,11 @@
 //!    of columns covers the footprint. Each face's bounding box in that frame, grown by
 //!    [`ROTATION_MARGIN_M`] to absorb the rounding of the rotation, contains every rendering of
 //!    the face (any triangulation of its vertices lies in their convex hull). The face's z-range
-//!    is pushed into every column whose closed square that box meets. Between the merged z-ranges
+//!    is pushed into every column whose closed square that box meets, unless an edge normal of
+//!    the face separates the square from the face's vertices by more than that margin (separating
+//!    axes: disjoint projections on any axis mean disjoint sets, so this only drops columns the
+//!    face's hull cannot reach; it keeps slanted walls out of interior columns). The direction
+//!    of the frame only affects how much is proven, never soundness. Between the merged z-ranges
 //!    of a column lie open gaps; the gap prism (column square x gap) meets no face box, so no
 //!    surface point: the prism is connected and entirely inside or entirely outside.
 //! 3. *One exact ray per gap.* Take the column centre `c` (rotated back; any point of the column
@@ -126,9 +130,18 @@ fn odd_edges(mesh: &Mesh) -> Option<usize> {
     Some(edges.values().filter(|&&c| c % 2 == 1).count())
 }
 
-/// Angle of the longest horizontal-ish edge (slope under 45 degrees), folded into [0, 90).
+/// Width of the direction histogram bins, degrees.
+const ANGLE_BIN_DEG: f64 = 1.0;
+
+/// The object's dominant horizontal direction, folded into [0, 90): edge directions (slope under
+/// 45 degrees) are binned mod 90 degrees, weighted by horizontal length, and the longest edge of
+/// the heaviest bin gives the angle. Triangulation diagonals scatter over many bins, while the
+/// walls and eaves of a building pile up in one. Any angle is sound; this one makes columns
+/// follow walls.
 fn dominant_angle(mesh: &Mesh) -> f64 {
-    let mut best = (0.0f64, 0.0f64);
+    let nbins = (90.0 / ANGLE_BIN_DEG) as usize;
+    let mut weight = vec![0.0f64; nbins];
+    let mut longest = vec![(0.0f64, 0.0f64); nbins];
     for f in &mesh.faces {
         for ring in &f.rings {
             let n = ring.len();
@@ -141,14 +154,24 @@ fn dominant_angle(mesh: &Mesh) -> f64 {
                 };
                 let d = *b - *a;
                 let h = d.x.hypot(d.y);
-                if h > best.0 && d.z.abs() < h {
-                    best = (h, d.y.atan2(d.x));
+                if !(h > 0.0 && d.z.abs() < h) {
+                    continue;
+                }
+                let ang = d.y.atan2(d.x).rem_euclid(std::f64::consts::FRAC_PI_2);
+                let bin = ((ang.to_degrees() / ANGLE_BIN_DEG) as usize).min(nbins - 1);
+                weight[bin] += h;
+                if h > longest[bin].0 {
+                    longest[bin] = (h, ang);
                 }
             }
         }
     }
-    best.1.rem_euclid(std::f64::consts::FRAC_PI_2)
+    let best = (0..nbins).fold(0, |b, k| if weight[k] > weight[b] { k } else { b });
+    longest[best].1
 }
+
+/// Most edge normals of one face used as separating axes (any subset of axes is sound).
+const MAX_AXES_PER_FACE: usize = 32;
 
 struct FaceInfo {
     lo: DVec2,
@@ -173,7 +196,8 @@ pub fn solid_pieces(mesh: &Mesh) -> Result<Vec<SolidPiece>, NoBlocker> {
         sin: theta.sin(),
     };
 
-    // Face boxes in the rotated frame, and the footprint extent.
+    // Every vertex in the rotated frame; face boxes there, and the footprint extent.
+    let uv: Vec<DVec2> = mesh.vertices.iter().map(|p| frame.to_uv(p.truncate())).collect();
     let mut infos: Vec<FaceInfo> = Vec::with_capacity(mesh.faces.len());
     let (mut emin, mut emax) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
     for f in &mesh.faces {
@@ -184,24 +208,21 @@ pub fn solid_pieces(mesh: &Mesh) -> Result<Vec<SolidPiece>, NoBlocker> {
             zmax: f64::NEG_INFINITY,
         };
         for &i in f.rings.iter().flatten() {
-            let p = mesh.vertices[i as usize]; // indices checked by odd_edges
-            let q = frame.to_uv(p.truncate());
+            // Indices were checked by `odd_edges`.
+            let q = uv[i as usize];
+            let z = mesh.vertices[i as usize].z;
             fi.lo = fi.lo.min(q);
             fi.hi = fi.hi.max(q);
-            fi.zmin = fi.zmin.min(p.z);
-            fi.zmax = fi.zmax.max(p.z);
+            fi.zmin = fi.zmin.min(z);
+            fi.zmax = fi.zmax.max(z);
         }
-        if !(fi.lo.x <= fi.hi.x && fi.lo.y <= fi.hi.y && fi.zmin <= fi.zmax) {
-            // A face without vertices is no surface.
-            fi.lo = DVec2::splat(f64::INFINITY);
-            fi.hi = DVec2::splat(f64::NEG_INFINITY);
-            infos.push(fi);
-            continue;
+        if fi.lo.x <= fi.hi.x && fi.lo.y <= fi.hi.y {
+            emin = emin.min(fi.lo);
+            emax = emax.max(fi.hi);
+            fi.lo -= DVec2::splat(ROTATION_MARGIN_M);
+            fi.hi += DVec2::splat(ROTATION_MARGIN_M);
         }
-        emin = emin.min(fi.lo);
-        emax = emax.max(fi.hi);
-        fi.lo -= DVec2::splat(ROTATION_MARGIN_M);
-        fi.hi += DVec2::splat(ROTATION_MARGIN_M);
+        // A face without vertices keeps an empty box and touches no column.
         infos.push(fi);
     }
     if !(emin.x < emax.x && emin.y < emax.y) {
@@ -215,7 +236,12 @@ pub fn solid_pieces(mesh: &Mesh) -> Result<Vec<SolidPiece>, NoBlocker> {
     let u_at = |i: usize| emin.x + i as f64 * side;
     let v_at = |j: usize| emin.y + j as f64 * side;
 
-    // Faces per column (closed overlap of the grown box with the column square).
+    // Faces per column: those whose vertices' convex hull (which holds any rendering of the
+    // face) may meet the closed column square. Candidates come from the grown box; a candidate
+    // is dropped only when the projections of the face's vertices and of the square's corners on
+    // some edge normal of the face are apart by more than ROTATION_MARGIN_M (separating axis: the
+    // sets are then disjoint, whatever the shape of the face). All quantities are relative to
+    // `emin`, so rounding stays near 1e-12 m, far under the margin.
     let mut cols: Vec<Vec<u32>> = vec![Vec::new(); nu * nv];
     let range = |lo: f64, hi: f64, origin: f64, n: usize, at: &dyn Fn(usize) -> f64| {
         let a = ((lo - origin) / side).floor() - 1.0;
@@ -232,15 +258,57 @@ pub fn solid_pieces(mesh: &Mesh) -> Result<Vec<SolidPiece>, NoBlocker> {
         }
         out
     };
-    for (fi_idx, fi) in infos.iter().enumerate() {
+    let mut axes: Vec<(DVec2, f64, f64)> = Vec::new();
+    for (fi_idx, (fi, face)) in infos.iter().zip(&mesh.faces).enumerate() {
         if !(fi.lo.x <= fi.hi.x) {
             continue;
         }
         let us = range(fi.lo.x, fi.hi.x, emin.x, nu, &u_at);
         let vs = range(fi.lo.y, fi.hi.y, emin.y, nv, &v_at);
+        if us.is_empty() || vs.is_empty() {
+            continue;
+        }
+        axes.clear();
+        if us.len() * vs.len() > 4 {
+            'edges: for ring in &face.rings {
+                let n = ring.len();
+                for k in 0..n {
+                    if axes.len() >= MAX_AXES_PER_FACE {
+                        break 'edges;
+                    }
+                    let d = uv[ring[(k + 1) % n] as usize] - uv[ring[k] as usize];
+                    let len = d.length();
+                    if !(len > 0.0) {
+                        continue;
+                    }
+                    let nrm = d.perp() / len;
+                    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+                    for &i in face.rings.iter().flatten() {
+                        let t = (uv[i as usize] - emin).dot(nrm);
+                        lo = lo.min(t);
+                        hi = hi.max(t);
+                    }
+                    axes.push((nrm, lo, hi));
+                }
+            }
+        }
         for &j in &vs {
             for &i in &us {
-                cols[j * nu + i].push(fi_idx as u32);
+                let corners = [
+                    DVec2::new(u_at(i), v_at(j)) - emin,
+                    DVec2::new(u_at(i + 1), v_at(j)) - emin,
+                    DVec2::new(u_at(i + 1), v_at(j + 1)) - emin,
+                    DVec2::new(u_at(i), v_at(j + 1)) - emin,
+                ];
+                let separated = axes.iter().any(|&(nrm, lo, hi)| {
+                    let ts = corners.map(|c| c.dot(nrm));
+                    let smin = ts.iter().copied().fold(f64::INFINITY, f64::min);
+                    let smax = ts.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    smin > hi + ROTATION_MARGIN_M || smax < lo - ROTATION_MARGIN_M
+                });
+                if !separated {
+                    cols[j * nu + i].push(fi_idx as u32);
+                }
             }
         }
     }
