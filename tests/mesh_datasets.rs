@@ -61,15 +61,85 @@ fn load_one(rel: &str) -> (Scene, Summary) {
     (scene, s)
 }
 
+fn counts(s: &Summary) -> (usize, usize, usize, usize, usize) {
+    let get = |k: &str| s.without.get(k).copied().unwrap_or(0);
+    (
+        s.objects,
+        s.with_blockers,
+        get("open mesh"),
+        get("no provable interior"),
+        s.without.values().sum::<usize>() - get("open mesh") - get("no provable interior"),
+    )
+}
+
 #[test]
-fn probe() {
-    for f in [
-        "denhaag/DenHaag_01_buildings.obj",
-        "denhaag/DenHaag_01.json",
-        "delft/delft.json",
-        "delft/delft_buildings.obj",
-        "gelderseplein/gelderseplein.obj",
-    ] {
-        load_one(f);
-    }
+fn denhaag_obj() {
+    let (scene, s) = load_one("denhaag/DenHaag_01_buildings.obj");
+    assert_eq!(scene.report.files[0].format, "OBJ");
+    // (objects, with blockers, open, closed but unproven, other reasons), as measured.
+    assert_eq!(counts(&s), (1990, 1918, 2, 70, 0));
+    // Every object either gives blockers or says why not.
+    assert_eq!(s.with_blockers + s.without.values().sum::<usize>(), s.objects);
+    // The README says 1,988 closed: the 2 open ones are exactly the rest.
+    assert!(s.with_blockers as f64 > 0.95 * 1988.0);
+    assert!(s.pieces >= s.with_blockers);
+}
+
+#[test]
+fn denhaag_cityjson_0_8() {
+    let (scene, s) = load_one("denhaag/DenHaag_01.json");
+    let f = &scene.report.files[0];
+    assert_eq!(f.format, "CityJSON");
+    assert_eq!(f.other_types.get("TINRelief"), Some(&1));
+    // 844 buildings + 1,653 parts; 507 buildings carry their geometry in their parts.
+    assert_eq!(f.other_types.get("Building (geometry in parts)"), Some(&507));
+    assert_eq!(s.objects, 844 + 1653 - 507);
+    assert!(scene.report.skipped.is_empty());
+    assert_eq!(counts(&s), (1990, 1913, 0, 77, 0));
+}
+
+#[test]
+fn delft_cityjson_2_0() {
+    let (scene, s) = load_one("delft/delft.json");
+    let f = &scene.report.files[0];
+    let want: BTreeMap<String, usize> = [
+        ("Bridge", 3),
+        ("GenericCityObject", 54),
+        ("LandUse", 81),
+        ("PlantCover", 126),
+        ("Road", 143),
+        ("WaterBody", 3),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    assert_eq!(f.other_types, want);
+    // The LoD1 solids of 3dfier have no floor surface: every one is open, and none may give a
+    // blocker.
+    assert_eq!(counts(&s), (160, 0, 160, 0, 0));
+}
+
+#[test]
+fn delft_obj() {
+    let (_, s) = load_one("delft/delft_buildings.obj");
+    assert_eq!(counts(&s), (160, 0, 160, 0, 0));
+}
+
+#[test]
+fn gelderseplein_obj_groups_are_objects() {
+    let (scene, s) = load_one("gelderseplein/gelderseplein.obj");
+    // 24 buildings, each a footprint group and overlapping 3D groups: every group is an object.
+    assert_eq!(s.objects, 105);
+    assert_eq!(counts(&s), (105, 77, 28, 0, 0));
+    // Objects keep file order and their group line.
+    let lines: Vec<usize> = scene
+        .objects
+        .iter()
+        .map(|o| match o.location {
+            vocc::scene::Location::Line { line, .. } => line,
+            ref other => panic!("{other:?}"),
+        })
+        .collect();
+    assert!(lines.windows(2).all(|w| w[0] < w[1]));
+    assert_eq!(lines[0], 10904);
 }
