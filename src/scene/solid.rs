@@ -709,4 +709,27 @@ mod tests {
         };
         assert!(solid_pieces(&m).is_err());
     }
+
+    /// Every piece of every Den Haag object passes the independent sampling check.
+    #[test]
+    fn denhaag_obj_pieces_pass_the_brute_force_check() {
+        use crate::scene::{obj::read_obj, ReadOptions, Shape};
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("data/denhaag/DenHaag_01_buildings.obj");
+        let bytes = std::fs::read(&path).unwrap();
+        let read = read_obj(&path, &bytes, &ReadOptions::default()).unwrap();
+        let origin = DVec3::new(78000.0, 457000.0, 0.0);
+        let mut checked = 0;
+        for o in read.objects {
+            let Shape::Mesh(mut m) = o.shape else { panic!() };
+            for v in &mut m.vertices {
+                *v -= origin;
+            }
+            if let Ok(pieces) = solid_pieces(&m) {
+                assert_pieces_inside(&m, &pieces);
+                checked += pieces.len();
+            }
+        }
+        assert!(checked > 5000, "{checked}");
+    }
 }
