@@ -14,7 +14,10 @@ fn load_broken(name: &str) -> LoadError {
     };
     let err = scene::load(&[path.clone()], &opts).expect_err("broken input must not load");
     assert_eq!(err.path, path, "the error names the file");
-    assert!(err.to_string().contains(name), "message names the file: {err}");
+    assert!(
+        err.to_string().contains(name),
+        "message names the file: {err}"
+    );
     err
 }
 
@@ -46,7 +49,10 @@ fn height_attribute_missing_from_every_feature() {
         panic!("{e}")
     };
     assert_eq!(attr, "height");
-    assert!(hint.contains("HAUTEUR"), "the hint lists what is there: {hint}");
+    assert!(
+        hint.contains("HAUTEUR"),
+        "the hint lists what is there: {hint}"
+    );
 }
 
 #[test]
@@ -73,14 +79,26 @@ fn coordinate_beyond_f64_is_malformed_json_with_line() {
 #[test]
 fn position_that_is_not_numbers() {
     let e = load_broken("geojson_position_not_numbers.geojson");
-    assert!(matches!(e.kind, LoadErrorKind::Malformed { format: "GeoJSON", .. }), "{e}");
+    assert!(
+        matches!(
+            e.kind,
+            LoadErrorKind::Malformed {
+                format: "GeoJSON",
+                ..
+            }
+        ),
+        "{e}"
+    );
     assert_eq!(e.location, Location::Feature(0));
 }
 
 #[test]
 fn json_that_is_not_geojson_nor_cityjson() {
     let e = load_broken("geojson_not_a_feature_collection.geojson");
-    assert!(matches!(e.kind, LoadErrorKind::Malformed { format: "JSON", .. }), "{e}");
+    assert!(
+        matches!(e.kind, LoadErrorKind::Malformed { format: "JSON", .. }),
+        "{e}"
+    );
 }
 
 #[test]
@@ -99,7 +117,10 @@ fn unknown_extension() {
 fn no_height_option_for_geojson() {
     let path = repo(common::LYON);
     let e = scene::load(&[path], &ReadOptions::default()).unwrap_err();
-    assert!(matches!(e.kind, LoadErrorKind::MissingAttribute { .. }), "{e}");
+    assert!(
+        matches!(e.kind, LoadErrorKind::MissingAttribute { .. }),
+        "{e}"
+    );
     assert!(e.to_string().contains("--height-attr"), "{e}");
 }
 

@@ -53,7 +53,10 @@ fn obj_no_faces() {
 fn cityjson_unknown_geometry() {
     let e = fail("cityjson_unknown_geometry.json");
     assert_eq!(e.location, Location::CityObject("bad".into()));
-    assert_eq!(e.kind, LoadErrorKind::UnknownGeometryType("Polyhedron".into()));
+    assert_eq!(
+        e.kind,
+        LoadErrorKind::UnknownGeometryType("Polyhedron".into())
+    );
 }
 
 #[test]
@@ -61,7 +64,13 @@ fn cityjson_vertex_index_out_of_range() {
     let e = fail("cityjson_vertex_index_out_of_range.json");
     assert_eq!(e.location, Location::CityObject("b1".into()));
     assert!(
-        matches!(e.kind, LoadErrorKind::Malformed { format: "CityJSON", .. }),
+        matches!(
+            e.kind,
+            LoadErrorKind::Malformed {
+                format: "CityJSON",
+                ..
+            }
+        ),
         "{e}"
     );
 }

@@ -17,7 +17,11 @@ fn vocc(args: &[&str]) -> std::process::Output {
 #[test]
 fn info_json_on_lyon_reports_objects_and_pieces() {
     let out = vocc(&["info", LYON, "--height-attr", "HAUTEUR", "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["objects"], 2576);
     assert_eq!(v["blocker_objects"], 2576);
@@ -76,10 +80,20 @@ fn gen_city_is_deterministic_and_loads() {
             "-o",
             p.to_str().unwrap(),
         ]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
-    let out = vocc(&["info", a.to_str().unwrap(), "--height-attr", "height", "--json"]);
+    let out = vocc(&[
+        "info",
+        a.to_str().unwrap(),
+        "--height-attr",
+        "height",
+        "--json",
+    ]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["objects"], 500);
     assert_eq!(v["blocker_objects"], 500);

@@ -47,12 +47,29 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
     let version = match v.get("version") {
         Some(Value::String(s)) => s.clone(),
         Some(Value::Number(n)) => n.to_string(),
-        Some(other) => return Err(err(Location::File, LoadErrorKind::UnsupportedVersion(other.to_string()))),
-        None => return Err(err(Location::File, LoadErrorKind::UnsupportedVersion("missing".into()))),
+        Some(other) => {
+            return Err(err(
+                Location::File,
+                LoadErrorKind::UnsupportedVersion(other.to_string()),
+            ))
+        }
+        None => {
+            return Err(err(
+                Location::File,
+                LoadErrorKind::UnsupportedVersion("missing".into()),
+            ))
+        }
     };
     let major = version.split('.').next().unwrap_or("");
-    if !matches!(major, "0" | "1" | "2") || version.split('.').any(|p| p.is_empty() || !p.bytes().all(|b| b.is_ascii_digit())) {
-        return Err(err(Location::File, LoadErrorKind::UnsupportedVersion(version)));
+    if !matches!(major, "0" | "1" | "2")
+        || version
+            .split('.')
+            .any(|p| p.is_empty() || !p.bytes().all(|b| b.is_ascii_digit()))
+    {
+        return Err(err(
+            Location::File,
+            LoadErrorKind::UnsupportedVersion(version),
+        ));
     }
 
     // Transform.
@@ -60,16 +77,26 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
         None | Some(Value::Null) => ([1.0; 3], [0.0; 3]),
         Some(t) => {
             let triple = |key: &str| -> Result<[f64; 3], LoadError> {
-                let a = t.get(key).and_then(|a| a.as_array()).filter(|a| a.len() == 3);
+                let a = t
+                    .get(key)
+                    .and_then(|a| a.as_array())
+                    .filter(|a| a.len() == 3);
                 let Some(a) = a else {
-                    return Err(malformed(Location::File, format!("transform.{key} must be an array of 3 numbers")));
+                    return Err(malformed(
+                        Location::File,
+                        format!("transform.{key} must be an array of 3 numbers"),
+                    ));
                 };
                 let mut out = [0.0; 3];
                 for (k, x) in a.iter().enumerate() {
                     let Some(f) = x.as_f64() else {
-                        return Err(malformed(Location::File, format!("transform.{key}[{k}] is not a number")));
+                        return Err(malformed(
+                            Location::File,
+                            format!("transform.{key}[{k}] is not a number"),
+                        ));
                     };
-                    out[k] = check_coord(f, &format!("transform.{key}[{k}]")).map_err(|e| err(Location::File, e))?;
+                    out[k] = check_coord(f, &format!("transform.{key}[{k}]"))
+                        .map_err(|e| err(Location::File, e))?;
                 }
                 Ok(out)
             };
@@ -79,18 +106,27 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
 
     // Vertices.
     let Some(raw_vertices) = v.get("vertices").and_then(|a| a.as_array()) else {
-        return Err(malformed(Location::File, "\"vertices\" is missing or not an array".into()));
+        return Err(malformed(
+            Location::File,
+            "\"vertices\" is missing or not an array".into(),
+        ));
     };
     let mut vertices = Vec::with_capacity(raw_vertices.len());
     for (i, rv) in raw_vertices.iter().enumerate() {
         let a = rv.as_array().filter(|a| a.len() == 3);
         let Some(a) = a else {
-            return Err(malformed(Location::Vertex(i), "a vertex must be an array of 3 numbers".into()));
+            return Err(malformed(
+                Location::Vertex(i),
+                "a vertex must be an array of 3 numbers".into(),
+            ));
         };
         let mut p = [0.0; 3];
         for k in 0..3 {
             let Some(f) = a[k].as_f64() else {
-                return Err(malformed(Location::Vertex(i), format!("coordinate {k} is not a number")));
+                return Err(malformed(
+                    Location::Vertex(i),
+                    format!("coordinate {k} is not a number"),
+                ));
             };
             let w = f * scale[k] + translate[k];
             p[k] = check_coord(w, ["x", "y", "z"][k]).map_err(|e| err(Location::Vertex(i), e))?;
@@ -99,14 +135,20 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
     }
 
     let Some(city_objects) = v.get("CityObjects").and_then(|c| c.as_object()) else {
-        return Err(malformed(Location::File, "\"CityObjects\" is missing or not an object".into()));
+        return Err(malformed(
+            Location::File,
+            "\"CityObjects\" is missing or not an object".into(),
+        ));
     };
 
     let wanted_lod = opts.lod.as_deref();
     let mut out = FileRead::default();
     for (id, obj) in city_objects {
         let at = || Location::CityObject(id.clone());
-        let ty = obj.get("type").and_then(|t| t.as_str()).unwrap_or("(no type)");
+        let ty = obj
+            .get("type")
+            .and_then(|t| t.as_str())
+            .unwrap_or("(no type)");
         if ty != "Building" && ty != "BuildingPart" {
             *out.other_types.entry(ty.to_string()).or_default() += 1;
             continue;
@@ -142,7 +184,12 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
                 Some(Kind::Instance) => unsupported = Some(gty.to_string()),
                 Some(Kind::NotAreal) => not_areal = Some(gty.to_string()),
                 Some(k) => usable.push((g, k, g.get("lod"))),
-                None => return Err(err(at(), LoadErrorKind::UnknownGeometryType(gty.to_string()))),
+                None => {
+                    return Err(err(
+                        at(),
+                        LoadErrorKind::UnknownGeometryType(gty.to_string()),
+                    ))
+                }
             }
         }
         if usable.is_empty() {
@@ -351,7 +398,7 @@ mod tests {
 
     #[test]
     fn reads_buildings_in_order_with_lod_choice() {
-        let sq = json!([[[[0,1,2,3]],[[4,5,6,7]]]]);
+        let sq = json!([[[[0, 1, 2, 3]], [[4, 5, 6, 7]]]]);
         let v = doc(json!({
             "b": {"type": "Building", "geometry": [
                 {"type": "Solid", "lod": "1", "boundaries": sq},
@@ -362,18 +409,31 @@ mod tests {
             "i": {"type": "Building", "geometry": [{"type": "GeometryInstance", "boundaries": [0]}]}
         }));
         let r = read(v.clone(), None).unwrap();
-        assert_eq!(r.objects.iter().map(|o| o.name.as_str()).collect::<Vec<_>>(), ["b", "a"]);
-        let Shape::Mesh(m) = &r.objects[0].shape else { panic!() };
+        assert_eq!(
+            r.objects
+                .iter()
+                .map(|o| o.name.as_str())
+                .collect::<Vec<_>>(),
+            ["b", "a"]
+        );
+        let Shape::Mesh(m) = &r.objects[0].shape else {
+            panic!()
+        };
         assert_eq!(m.faces.len(), 1);
         assert_eq!(m.vertices.len(), 3);
         assert_eq!(m.vertices[1], DVec3::new(101.0, 200.0, 3.0));
         assert_eq!(r.other_types["Road"], 1);
         assert_eq!(r.other_types["Building (geometry in parts)"], 1);
         assert_eq!(r.skipped.len(), 1);
-        assert!(matches!(r.skipped[0].reason, SkipReason::UnsupportedGeometry(_)));
+        assert!(matches!(
+            r.skipped[0].reason,
+            SkipReason::UnsupportedGeometry(_)
+        ));
         let r = read(v.clone(), Some("1")).unwrap();
         assert_eq!(r.objects.len(), 1);
-        let Shape::Mesh(m) = &r.objects[0].shape else { panic!() };
+        let Shape::Mesh(m) = &r.objects[0].shape else {
+            panic!()
+        };
         assert_eq!(m.faces.len(), 2);
         assert_eq!(r.skipped.len(), 2);
         let r = read(v, Some("2.0")).unwrap();
@@ -392,7 +452,10 @@ mod tests {
         assert!(matches!(e.kind, LoadErrorKind::Malformed { .. }));
         let mut d = doc(json!({}));
         d["version"] = json!("3.0");
-        assert!(matches!(read(d, None).unwrap_err().kind, LoadErrorKind::UnsupportedVersion(_)));
+        assert!(matches!(
+            read(d, None).unwrap_err().kind,
+            LoadErrorKind::UnsupportedVersion(_)
+        ));
         let mut d = doc(json!({}));
         d["vertices"][5] = json!([0, 0, 2e9]);
         let e = read(d, None).unwrap_err();

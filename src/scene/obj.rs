@@ -62,7 +62,9 @@ fn corner_index(tok: &str, n_pos: usize) -> Result<usize, String> {
     if x < 0 {
         let k = n_pos as i64 + x;
         if k < 0 {
-            return Err(format!("relative face index {x} reaches before the first vertex"));
+            return Err(format!(
+                "relative face index {x} reaches before the first vertex"
+            ));
         }
         Ok(k as usize)
     } else {
@@ -110,10 +112,17 @@ fn scan(bytes: &[u8]) -> Scan {
                     note(
                         &mut s.bad_line,
                         lineno,
-                        format!("vertex line needs 3 numbers (plus w or r g b), got {:?}", toks),
+                        format!(
+                            "vertex line needs 3 numbers (plus w or r g b), got {:?}",
+                            toks
+                        ),
                     );
                 } else {
-                    let w = if toks.len() == 4 { vals[3].unwrap_or(1.0) } else { 1.0 };
+                    let w = if toks.len() == 4 {
+                        vals[3].unwrap_or(1.0)
+                    } else {
+                        1.0
+                    };
                     if w == 0.0 {
                         note(&mut s.bad_line, lineno, "vertex w is 0".into());
                     }
@@ -177,7 +186,11 @@ fn scan(bytes: &[u8]) -> Scan {
             note(
                 &mut s.bad_line,
                 line,
-                format!("face index {} is beyond the {} vertices of the file", k + 1, n_pos),
+                format!(
+                    "face index {} is beyond the {} vertices of the file",
+                    k + 1,
+                    n_pos
+                ),
             );
         }
     }
@@ -216,7 +229,9 @@ pub fn read_obj(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<FileRe
     let mut out = FileRead::default();
     for g in &sc.empty {
         out.skipped.push(Skipped {
-            location: g.line.map_or(Location::File, |line| Location::Line { line, column: None }),
+            location: g
+                .line
+                .map_or(Location::File, |line| Location::Line { line, column: None }),
             name: if g.name.is_empty() {
                 format!("group at line {}", g.line.unwrap_or(0))
             } else {
@@ -230,7 +245,8 @@ pub fn read_obj(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<FileRe
         let (location, mut name) = if aligned {
             let g = &sc.models[k];
             (
-                g.line.map_or(Location::File, |line| Location::Line { line, column: None }),
+                g.line
+                    .map_or(Location::File, |line| Location::Line { line, column: None }),
                 g.name.clone(),
             )
         } else {
@@ -265,7 +281,10 @@ pub fn read_obj(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<FileRe
         });
     }
     if !any_faces {
-        return Err(err(Location::File, LoadErrorKind::MalformedObj("no faces".into())));
+        return Err(err(
+            Location::File,
+            LoadErrorKind::MalformedObj("no faces".into()),
+        ));
     }
     // Objects and skips are each in file order; keep skips sorted by line for reports.
     out.skipped.sort_by_key(|s| match s.location {
@@ -297,7 +316,13 @@ fn parse_tobj(bytes: &[u8]) -> Result<Vec<tobj::Model>, String> {
 fn build_mesh(m: &tobj::Mesh) -> Result<Mesh, String> {
     let n = m.positions.len() / 3;
     let vertices: Vec<DVec3> = (0..n)
-        .map(|i| DVec3::new(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]))
+        .map(|i| {
+            DVec3::new(
+                m.positions[3 * i],
+                m.positions[3 * i + 1],
+                m.positions[3 * i + 2],
+            )
+        })
         .collect();
     let mut faces = Vec::new();
     let mut at = 0usize;
@@ -345,14 +370,30 @@ mod tests {
         let r = read(src).unwrap();
         assert_eq!(r.objects.len(), 3);
         assert_eq!(r.objects[0].name, "a");
-        assert_eq!(r.objects[0].location, Location::Line { line: 5, column: None });
+        assert_eq!(
+            r.objects[0].location,
+            Location::Line {
+                line: 5,
+                column: None
+            }
+        );
         assert_eq!(r.objects[1].name, "object 2");
         assert_eq!(r.objects[2].name, "c");
-        assert_eq!(r.objects[2].location, Location::Line { line: 10, column: None });
-        let Shape::Mesh(m) = &r.objects[0].shape else { panic!() };
+        assert_eq!(
+            r.objects[2].location,
+            Location::Line {
+                line: 10,
+                column: None
+            }
+        );
+        let Shape::Mesh(m) = &r.objects[0].shape else {
+            panic!()
+        };
         assert_eq!(m.faces.len(), 1);
         assert_eq!(m.faces[0].rings[0].len(), 4);
-        let Shape::Mesh(m) = &r.objects[2].shape else { panic!() };
+        let Shape::Mesh(m) = &r.objects[2].shape else {
+            panic!()
+        };
         assert_eq!(m.vertices.len(), 3);
         assert_eq!(r.skipped.len(), 1);
         assert_eq!(r.skipped[0].name, "empty");
@@ -362,20 +403,50 @@ mod tests {
     #[test]
     fn errors_carry_lines() {
         let e = read("v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n").unwrap_err();
-        assert_eq!(e.location, Location::Line { line: 2, column: None });
+        assert_eq!(
+            e.location,
+            Location::Line {
+                line: 2,
+                column: None
+            }
+        );
         assert!(matches!(e.kind, LoadErrorKind::NonFinite(_)));
         let e = read("v 0 0 0\nv 1 0 2e9\nv 0 1 0\nf 1 2 3\n").unwrap_err();
         assert!(matches!(e.kind, LoadErrorKind::OutOfRange { .. }));
         let e = read("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n").unwrap_err();
-        assert_eq!(e.location, Location::Line { line: 5, column: None });
+        assert_eq!(
+            e.location,
+            Location::Line {
+                line: 5,
+                column: None
+            }
+        );
         assert!(matches!(e.kind, LoadErrorKind::MalformedObj(_)));
         let e = read("v 0 0 0\nv 1 x 0\n").unwrap_err();
-        assert_eq!(e.location, Location::Line { line: 2, column: None });
+        assert_eq!(
+            e.location,
+            Location::Line {
+                line: 2,
+                column: None
+            }
+        );
         let e = read("v 0 0 0\n# nothing\n").unwrap_err();
         assert_eq!(e.kind, LoadErrorKind::MalformedObj("no faces".into()));
-        for junk in ["\u{0}\u{1}\u{2}", "f", "f 0 0 0", "f -5 -6 -7", "o\no\no", "v 1 2 3 0\nf 1 1 1"] {
+        for junk in [
+            "\u{0}\u{1}\u{2}",
+            "f",
+            "f 0 0 0",
+            "f -5 -6 -7",
+            "o\no\no",
+            "v 1 2 3 0\nf 1 1 1",
+        ] {
             let _ = read(junk);
         }
-        assert!(read_obj(Path::new("t"), &[0xff, 0xfe, b'\n', b'v'], &ReadOptions::default()).is_err());
+        assert!(read_obj(
+            Path::new("t"),
+            &[0xff, 0xfe, b'\n', b'v'],
+            &ReadOptions::default()
+        )
+        .is_err());
     }
 }
