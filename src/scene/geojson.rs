@@ -1,115 +1,190 @@
 //! GeoJSON footprint reader.
 //!
-//! Input: a parsed GeoJSON `FeatureCollection` (or single `Feature`) of Polygon or MultiPolygon
-//! footprints, 2D or 3D positions (z is ignored), and the attribute names to read.
+//! Input: GeoJSON features, one at a time as [`super::json`] streams them out of a
+//! `FeatureCollection` (or a single `Feature`), with Polygon or MultiPolygon footprints, 2D or 3D
+//! positions (z is ignored), and the attribute names to read.
 //! Output: one footprint object per feature, in feature order, in world coordinates:
 //! `base` = the base attribute (0 when none is named), `top` = base + height, where height is the
 //! height attribute, or the storey attribute times the storey height when the height is missing.
 //! Features without either are skipped and reported, as are features whose geometry is null or
 //! has no area.
 //! Invariants: every coordinate is range-checked where it enters; errors name the feature index;
-//! an unknown geometry type is an error, not a skip.
+//! an unknown geometry type is an error, not a skip; memory holds one feature's JSON at a time.
 
 use std::path::Path;
 
 use glam::DVec2;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::Deserialize;
 use serde_json::{Map, Value};
 
 use super::error::{check_coord, LoadError, LoadErrorKind, Location};
 use super::{FileRead, Footprint, RawObject, ReadOptions, Ring, Shape, SkipReason, Skipped};
 
-/// Reads footprints from a parsed GeoJSON document.
-pub fn read_geojson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileRead, LoadError> {
-    let err = |loc, kind| LoadError::new(path, loc, kind);
-    let malformed = |loc, message: &str| {
-        err(
-            loc,
+/// One feature as parsed; coordinates are kept as a tree of numbers until the geometry type says
+/// how deep it must be.
+#[derive(Debug, Default, Deserialize)]
+pub struct FeatureIn {
+    #[serde(default)]
+    pub id: Option<Value>,
+    #[serde(default)]
+    pub properties: Option<Value>,
+    #[serde(default)]
+    pub geometry: Option<GeometryIn>,
+}
+
+#[derive(Debug, Deserialize)]
+pub struct GeometryIn {
+    #[serde(rename = "type")]
+    pub kind: Option<String>,
+    #[serde(default)]
+    pub coordinates: Option<Tree>,
+}
+
+/// Nested arrays of numbers, as GeoJSON coordinates are.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Tree {
+    Num(f64),
+    List(Vec<Tree>),
+}
+
+impl<'de> Deserialize<'de> for Tree {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Tree, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Tree;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an array of coordinates")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Tree, E> {
+                Ok(Tree::Num(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Tree, E> {
+                Ok(Tree::Num(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Tree, E> {
+                Ok(Tree::Num(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Tree, A::Error> {
+                let mut v = Vec::with_capacity(seq.size_hint().unwrap_or(4).min(4096));
+                while let Some(t) = seq.next_element()? {
+                    v.push(t);
+                }
+                Ok(Tree::List(v))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Turns features into footprint objects, one at a time.
+pub struct GeoJsonReader<'a> {
+    path: &'a Path,
+    opts: &'a ReadOptions,
+    out: FileRead,
+    features: usize,
+    saw_height: bool,
+    first_attributes: Option<Vec<String>>,
+}
+
+impl<'a> GeoJsonReader<'a> {
+    /// Fails at once when no height source is named: GeoJSON footprints carry no height.
+    pub fn new(path: &'a Path, opts: &'a ReadOptions) -> Result<Self, LoadError> {
+        if opts.height_attr.is_none() && opts.levels_attr.is_none() {
+            return Err(LoadError::new(
+                path,
+                Location::File,
+                LoadErrorKind::MissingAttribute {
+                    attr: "(none given)".into(),
+                    hint: "GeoJSON footprints need --height-attr NAME or --levels-attr NAME".into(),
+                },
+            ));
+        }
+        Ok(GeoJsonReader {
+            path,
+            opts,
+            out: FileRead::default(),
+            features: 0,
+            saw_height: false,
+            first_attributes: None,
+        })
+    }
+
+    fn err(&self, i: usize, kind: LoadErrorKind) -> LoadError {
+        LoadError::new(self.path, Location::Feature(i), kind)
+    }
+
+    fn malformed(&self, i: usize, message: String) -> LoadError {
+        self.err(
+            i,
             LoadErrorKind::Malformed {
                 format: "GeoJSON",
-                message: message.to_string(),
+                message,
             },
         )
-    };
-    if opts.height_attr.is_none() && opts.levels_attr.is_none() {
-        return Err(err(
-            Location::File,
-            LoadErrorKind::MissingAttribute {
-                attr: "(none given)".into(),
-                hint: "GeoJSON footprints need --height-attr NAME or --levels-attr NAME".into(),
-            },
-        ));
     }
-    let features: Vec<&Value> = match v.get("type").and_then(Value::as_str) {
-        Some("Feature") => vec![v],
-        _ => v
-            .get("features")
-            .and_then(Value::as_array)
-            .ok_or_else(|| {
-                malformed(
-                    Location::File,
-                    "FeatureCollection has no \"features\" array",
-                )
-            })?
-            .iter()
-            .collect(),
-    };
 
-    let mut out = FileRead::default();
-    let empty = Map::new();
-    let mut saw_height = false;
-    for (i, f) in features.iter().enumerate() {
-        let loc = Location::Feature(i);
-        let props = match f.get("properties") {
+    fn skip(&mut self, i: usize, name: &str, reason: SkipReason) {
+        self.out.skipped.push(Skipped {
+            location: Location::Feature(i),
+            name: name.to_string(),
+            reason,
+        });
+    }
+
+    /// Index the next feature will get.
+    pub fn next_index(&self) -> usize {
+        self.features
+    }
+
+    /// Reads the next feature.
+    pub fn feature(&mut self, f: FeatureIn) -> Result<(), LoadError> {
+        let i = self.features;
+        self.features += 1;
+        let empty = Map::new();
+        let props = match &f.properties {
             None | Some(Value::Null) => &empty,
             Some(Value::Object(m)) => m,
-            Some(_) => return Err(malformed(loc, "\"properties\" is not an object")),
+            Some(_) => return Err(self.malformed(i, "\"properties\" is not an object".into())),
         };
-        let name = feature_name(f, props).unwrap_or_else(|| format!("feature {i}"));
-        let skip = |out: &mut FileRead, reason| {
-            out.skipped.push(Skipped {
-                location: Location::Feature(i),
-                name: name.clone(),
-                reason,
-            })
+        if self.first_attributes.is_none() && !props.is_empty() {
+            self.first_attributes = Some(props.keys().take(30).cloned().collect());
+        }
+        let name = feature_name(f.id.as_ref(), props).unwrap_or_else(|| format!("feature {i}"));
+        let Some(geom) = &f.geometry else {
+            self.skip(i, &name, SkipReason::EmptyGeometry);
+            return Ok(());
         };
-        let geom = match f.get("geometry") {
-            None | Some(Value::Null) => {
-                skip(&mut out, SkipReason::EmptyGeometry);
-                continue;
-            }
-            Some(g) => g,
+        let Some(kind) = geom.kind.as_deref() else {
+            return Err(self.malformed(i, "geometry has no \"type\"".into()));
         };
-        let gtype = geom
-            .get("type")
-            .and_then(Value::as_str)
-            .ok_or_else(|| malformed(loc.clone(), "geometry has no \"type\""))?;
-        let coords = geom.get("coordinates");
-        let polygons: Vec<Vec<Ring>> = match gtype {
-            "Polygon" => vec![rings(coords, 1).map_err(|m| malformed(loc.clone(), &m))?],
-            "MultiPolygon" => {
-                let arr = coords.and_then(Value::as_array).ok_or_else(|| {
-                    malformed(loc.clone(), "MultiPolygon coordinates are not an array")
-                })?;
-                arr.iter()
-                    .map(|p| rings(Some(p), 2))
+        let coords = geom.coordinates.as_ref();
+        let polygons: Vec<Vec<Ring>> = match kind {
+            "Polygon" => vec![rings(coords, "Polygon").map_err(|m| self.malformed(i, m))?],
+            "MultiPolygon" => match coords {
+                Some(Tree::List(parts)) => parts
+                    .iter()
+                    .map(|p| rings(Some(p), "MultiPolygon part"))
                     .collect::<Result<_, _>>()
-                    .map_err(|m| malformed(loc.clone(), &m))?
-            }
+                    .map_err(|m| self.malformed(i, m))?,
+                _ => {
+                    return Err(
+                        self.malformed(i, "MultiPolygon coordinates are not an array".into())
+                    )
+                }
+            },
             "Point" | "MultiPoint" | "LineString" | "MultiLineString" | "GeometryCollection" => {
-                skip(&mut out, SkipReason::NotAreal(gtype.to_string()));
-                continue;
+                self.skip(i, &name, SkipReason::NotAreal(kind.to_string()));
+                return Ok(());
             }
             other => {
-                return Err(err(
-                    loc,
-                    LoadErrorKind::UnknownGeometryType(other.to_string()),
-                ));
+                return Err(self.err(i, LoadErrorKind::UnknownGeometryType(other.to_string())));
             }
         };
         for p in polygons.iter().flatten().flatten() {
             check_coord(p.x, "x")
                 .and_then(|_| check_coord(p.y, "y"))
-                .map_err(|k| err(loc.clone(), k))?;
+                .map_err(|k| self.err(i, k))?;
         }
         let polygons: Vec<Vec<Ring>> = polygons
             .into_iter()
@@ -117,20 +192,20 @@ pub fn read_geojson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileRe
             .filter(|p| !p.is_empty())
             .collect();
         if polygons.is_empty() {
-            skip(&mut out, SkipReason::EmptyGeometry);
-            continue;
+            self.skip(i, &name, SkipReason::EmptyGeometry);
+            return Ok(());
         }
 
         let number = |attr: &str| -> Result<Option<f64>, LoadError> {
             match props.get(attr) {
                 None | Some(Value::Null) => Ok(None),
                 Some(Value::Number(n)) => Ok(n.as_f64()),
+                Some(Value::String(s)) if s.trim().is_empty() => Ok(None),
                 Some(Value::String(s)) if s.trim().parse::<f64>().is_ok() => {
                     Ok(s.trim().parse::<f64>().ok())
                 }
-                Some(Value::String(s)) if s.trim().is_empty() => Ok(None),
-                Some(other) => Err(err(
-                    Location::Feature(i),
+                Some(other) => Err(self.err(
+                    i,
                     LoadErrorKind::BadAttribute {
                         attr: attr.to_string(),
                         value: other.to_string(),
@@ -138,108 +213,115 @@ pub fn read_geojson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileRe
                 )),
             }
         };
-        let height = match &opts.height_attr {
+        let height = match &self.opts.height_attr {
             Some(a) => number(a)?,
             None => None,
         };
-        let height = match (height, &opts.levels_attr) {
+        let height = match (height, &self.opts.levels_attr) {
             (Some(h), _) => Some(h),
-            (None, Some(a)) => number(a)?.map(|n| n * opts.storey_height),
+            (None, Some(a)) => number(a)?.map(|n| n * self.opts.storey_height),
             (None, None) => None,
         };
-        let Some(height) = height else {
-            skip(&mut out, SkipReason::NoHeight);
-            continue;
+        let base = match &self.opts.base_attr {
+            None => Some(0.0),
+            Some(a) => number(a)?,
         };
-        check_coord(height, "height").map_err(|k| err(loc.clone(), k))?;
-        saw_height = true;
-        let base = match &opts.base_attr {
-            None => 0.0,
-            Some(a) => match number(a)? {
-                Some(b) => check_coord(b, "base").map_err(|k| err(loc.clone(), k))?,
-                None => {
-                    skip(&mut out, SkipReason::NoBase);
-                    continue;
-                }
-            },
+        let (Some(height), Some(base)) = (height, base) else {
+            let reason = if height.is_none() {
+                SkipReason::NoHeight
+            } else {
+                SkipReason::NoBase
+            };
+            self.saw_height |= height.is_some();
+            self.skip(i, &name, reason);
+            return Ok(());
         };
-        out.objects.push(RawObject {
+        check_coord(height, "height").map_err(|k| self.err(i, k))?;
+        check_coord(base, "base").map_err(|k| self.err(i, k))?;
+        self.saw_height = true;
+        self.out.objects.push(RawObject {
             name,
-            location: loc,
+            location: Location::Feature(i),
             shape: Shape::Footprint(Footprint {
                 polygons,
                 base,
                 top: base + height,
             }),
         });
+        Ok(())
     }
-    if !saw_height && !features.is_empty() {
-        let attr = opts
-            .height_attr
-            .clone()
-            .or_else(|| opts.levels_attr.clone())
-            .unwrap_or_default();
-        let mut names: Vec<String> = features
-            .iter()
-            .find_map(|f| f.get("properties").and_then(Value::as_object))
-            .map(|m| m.keys().cloned().collect())
-            .unwrap_or_default();
-        names.truncate(30);
-        return Err(err(
-            Location::File,
-            LoadErrorKind::MissingAttribute {
-                attr,
-                hint: format!(
-                    "no feature has a usable height; the first feature's attributes are: {}",
-                    names.join(", ")
-                ),
-            },
-        ));
+
+    /// Ends the file. Fails when features exist but none had a usable height: the attribute
+    /// name is almost certainly wrong.
+    pub fn finish(self) -> Result<FileRead, LoadError> {
+        if !self.saw_height && self.features > 0 {
+            let attr = self
+                .opts
+                .height_attr
+                .clone()
+                .or_else(|| self.opts.levels_attr.clone())
+                .unwrap_or_default();
+            let names = self.first_attributes.unwrap_or_default();
+            return Err(LoadError::new(
+                self.path,
+                Location::File,
+                LoadErrorKind::MissingAttribute {
+                    attr,
+                    hint: format!(
+                        "no feature has a usable height; the first feature's attributes are: {}",
+                        names.join(", ")
+                    ),
+                },
+            ));
+        }
+        Ok(self.out)
     }
-    Ok(out)
 }
 
 /// The feature's id or name: the feature `id`, else a property `id`, `ID`, `name` or `NAME`.
-fn feature_name(f: &Value, props: &Map<String, Value>) -> Option<String> {
+fn feature_name(id: Option<&Value>, props: &Map<String, Value>) -> Option<String> {
     let as_name = |v: &Value| match v {
         Value::String(s) => Some(s.clone()),
         Value::Number(n) => Some(n.to_string()),
         _ => None,
     };
-    f.get("id").and_then(as_name).or_else(|| {
+    id.and_then(as_name).or_else(|| {
         ["id", "ID", "name", "NAME"]
             .iter()
             .find_map(|k| props.get(*k).and_then(as_name))
     })
 }
 
-/// Parses a Polygon's coordinates: an array of rings, each an array of positions.
-/// `depth_hint` only shapes the error message.
-fn rings(coords: Option<&Value>, depth_hint: usize) -> Result<Vec<Ring>, String> {
-    let what = if depth_hint == 1 {
-        "Polygon"
-    } else {
-        "MultiPolygon part"
+/// A Polygon's coordinates: an array of rings, each an array of positions.
+fn rings(coords: Option<&Tree>, what: &str) -> Result<Vec<Ring>, String> {
+    let Some(Tree::List(rs)) = coords else {
+        return Err(format!("{what} coordinates are not an array of rings"));
     };
-    let arr = coords
-        .and_then(Value::as_array)
-        .ok_or_else(|| format!("{what} coordinates are not an array of rings"))?;
-    arr.iter()
+    rs.iter()
         .enumerate()
         .map(|(ri, r)| {
-            r.as_array()
-                .ok_or_else(|| format!("{what} ring {ri} is not an array of positions"))?
-                .iter()
-                .map(|p| position(p).ok_or_else(|| format!("{what} ring {ri} has a position that is not an array of 2 or 3 numbers: {p}")))
+            let Tree::List(ps) = r else {
+                return Err(format!("{what} ring {ri} is not an array of positions"));
+            };
+            ps.iter()
+                .map(|p| {
+                    position(p).ok_or_else(|| {
+                        format!("{what} ring {ri} has a position that is not 2 to 4 numbers")
+                    })
+                })
                 .collect()
         })
         .collect()
 }
 
-fn position(p: &Value) -> Option<DVec2> {
-    let a = p.as_array()?;
-    if a.len() < 2 || a.len() > 4 {
-        return None;
+fn position(p: &Tree) -> Option<DVec2> {
+    let Tree::List(a) = p else { return None };
+    match a.as_slice() {
+        [Tree::Num(x), Tree::Num(y), rest @ ..]
+            if rest.len() <= 2 && rest.iter().all(|t| matches!(t, Tree::Num(_))) =>
+        {
+            Some(DVec2::new(*x, *y))
+        }
+        _ => None,
     }
-    Some(DVec2::new(a[0].as_f64()?, a[1].as_f64()?))
 }

@@ -16,8 +16,8 @@ use rayon::prelude::*;
 
 use super::error::{LoadError, LoadErrorKind, Location};
 use super::{
-    cityjson, decompose, footprint, geojson, obj, solid, Aabb3, Blocker, FileRead, FileStats,
-    Footprint, NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene, SceneReport, Shape,
+    decompose, footprint, json, obj, solid, Aabb3, Blocker, FileRead, FileStats, Footprint,
+    NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene, SceneReport, Shape,
 };
 
 /// Size of the grid the scene origin snaps to, metres.
@@ -42,31 +42,7 @@ pub fn read_file(path: &Path, opts: &ReadOptions) -> Result<(FileRead, &'static 
     if !matches!(ext.as_str(), "json" | "geojson" | "cityjson") {
         return Err(err(Location::File, LoadErrorKind::UnknownFormat));
     }
-    let value: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| {
-        err(
-            Location::Line {
-                line: e.line(),
-                column: Some(e.column()),
-            },
-            LoadErrorKind::MalformedJson(e.to_string()),
-        )
-    })?;
-    match value.get("type").and_then(|t| t.as_str()) {
-        Some("FeatureCollection") | Some("Feature") => {
-            Ok((geojson::read_geojson(path, &value, opts)?, "GeoJSON"))
-        }
-        Some("CityJSON") => Ok((cityjson::read_cityjson(path, &value, opts)?, "CityJSON")),
-        other => Err(err(
-            Location::File,
-            LoadErrorKind::Malformed {
-                format: "JSON",
-                message: format!(
-                    "top-level \"type\" is {}, expected \"FeatureCollection\", \"Feature\" or \"CityJSON\"",
-                    other.map(|s| format!("{s:?}")).unwrap_or_else(|| "missing".into())
-                ),
-            },
-        )),
-    }
+    json::read_json(path, &bytes, opts)
 }
 
 /// Loads files into one scene.

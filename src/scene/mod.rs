@@ -17,6 +17,7 @@ pub mod error;
 pub mod footprint;
 pub mod gencity;
 pub mod geojson;
+pub mod json;
 pub mod load;
 pub mod obj;
 pub mod solid;

@@ -1,0 +1,267 @@
+//! JSON scene documents in one streaming pass.
+//!
+//! Input: the bytes of a `.json`/`.geojson`/`.cityjson` file. Output: a [`FileRead`] and the
+//! format name. The top-level object is walked key by key: the members of a GeoJSON
+//! `FeatureCollection`'s `features` array are parsed and handed to [`GeoJsonReader`] one at a time,
+//! so a file of 10^6 footprints never sits in memory as a JSON tree; every other member is kept as
+//! a JSON value (small for GeoJSON; for CityJSON, the document itself), and a CityJSON document
+//! goes to [`cityjson::read_cityjson`] whole.
+//! Invariants: key order does not matter; malformed JSON fails with its line and column; a
+//! problem found in a feature fails with the feature index; nothing panics.
+
+use std::cell::RefCell;
+use std::fmt;
+use std::path::Path;
+
+use serde::de::{DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde_json::{Map, Value};
+
+use super::cityjson;
+use super::error::{LoadError, LoadErrorKind, Location};
+use super::geojson::{FeatureIn, GeoJsonReader};
+use super::{FileRead, ReadOptions};
+
+/// Reads a JSON scene document: GeoJSON or CityJSON.
+pub fn read_json(
+    path: &Path,
+    bytes: &[u8],
+    opts: &ReadOptions,
+) -> Result<(FileRead, &'static str), LoadError> {
+    let state = State {
+        path,
+        opts,
+        geojson: RefCell::new(None),
+        failure: RefCell::new(None),
+        feature: RefCell::new(None),
+    };
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    let parsed = Top(&state).deserialize(&mut de).and_then(|m| {
+        de.end()?;
+        Ok(m)
+    });
+    if let Some(e) = state.failure.borrow_mut().take() {
+        return Err(e);
+    }
+    let mut rest = parsed.map_err(|e| json_error(path, e, *state.feature.borrow()))?;
+    let kind = rest.get("type").and_then(Value::as_str).map(str::to_string);
+    match kind.as_deref() {
+        Some("FeatureCollection") => {
+            let reader = match state.geojson.into_inner() {
+                Some(r) => r,
+                None => {
+                    return Err(LoadError::new(
+                        path,
+                        Location::File,
+                        LoadErrorKind::Malformed {
+                            format: "GeoJSON",
+                            message: "FeatureCollection has no \"features\" array".into(),
+                        },
+                    ))
+                }
+            };
+            Ok((reader.finish()?, "GeoJSON"))
+        }
+        Some("Feature") => {
+            let mut reader = GeoJsonReader::new(path, opts)?;
+            let f = FeatureIn {
+                id: rest.remove("id"),
+                properties: rest.remove("properties"),
+                geometry: match rest.remove("geometry") {
+                    None | Some(Value::Null) => None,
+                    Some(g) => Some(serde_json::from_value(g).map_err(|e| {
+                        LoadError::new(
+                            path,
+                            Location::Feature(0),
+                            LoadErrorKind::Malformed {
+                                format: "GeoJSON",
+                                message: e.to_string(),
+                            },
+                        )
+                    })?),
+                },
+            };
+            reader.feature(f)?;
+            Ok((reader.finish()?, "GeoJSON"))
+        }
+        Some("CityJSON") => Ok((
+            cityjson::read_cityjson(path, &Value::Object(rest), opts)?,
+            "CityJSON",
+        )),
+        other => Err(LoadError::new(
+            path,
+            Location::File,
+            LoadErrorKind::Malformed {
+                format: "JSON",
+                message: format!(
+                    "top-level \"type\" is {}, expected \"FeatureCollection\", \"Feature\" or \"CityJSON\"",
+                    other.map(|s| format!("{s:?}")).unwrap_or_else(|| "missing".into())
+                ),
+            },
+        )),
+    }
+}
+
+/// Maps a serde_json error to a located load error: syntax errors are malformed JSON; data errors
+/// (a member of the wrong type) are malformed GeoJSON, naming the feature being read.
+fn json_error(path: &Path, e: serde_json::Error, feature: Option<usize>) -> LoadError {
+    use serde_json::error::Category;
+    let location = if e.line() > 0 {
+        Location::Line {
+            line: e.line(),
+            column: Some(e.column()),
+        }
+    } else {
+        Location::File
+    };
+    let kind = match (e.classify(), feature) {
+        (Category::Data, Some(i)) => LoadErrorKind::Malformed {
+            format: "GeoJSON",
+            message: format!("feature {i}: {e}"),
+        },
+        _ => LoadErrorKind::MalformedJson(e.to_string()),
+    };
+    LoadError::new(path, location, kind)
+}
+
+struct State<'a> {
+    path: &'a Path,
+    opts: &'a ReadOptions,
+    geojson: RefCell<Option<GeoJsonReader<'a>>>,
+    /// The first typed failure from inside the stream; it wins over the serde error used to stop.
+    failure: RefCell<Option<LoadError>>,
+    /// The feature being parsed, for errors.
+    feature: RefCell<Option<usize>>,
+}
+
+/// The top-level object: streams `features`, keeps the rest.
+struct Top<'s, 'a>(&'s State<'a>);
+
+impl<'de> DeserializeSeed<'de> for Top<'_, '_> {
+    type Value = Map<String, Value>;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_map(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Top<'_, '_> {
+    type Value = Map<String, Value>;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a GeoJSON or CityJSON object")
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let mut rest = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if key == "features" {
+                if self.0.geojson.borrow().is_some() {
+                    map.next_value::<IgnoredAny>()?;
+                    continue;
+                }
+                match GeoJsonReader::new(self.0.path, self.0.opts) {
+                    Ok(r) => *self.0.geojson.borrow_mut() = Some(r),
+                    Err(e) => {
+                        *self.0.failure.borrow_mut() = Some(e);
+                        return Err(serde::de::Error::custom("stopped"));
+                    }
+                }
+                map.next_value_seed(Features(self.0))?;
+            } else {
+                let v: Value = map.next_value()?;
+                rest.insert(key, v);
+            }
+        }
+        Ok(rest)
+    }
+}
+
+/// The `features` array, one feature at a time.
+struct Features<'s, 'a>(&'s State<'a>);
+
+impl<'de> DeserializeSeed<'de> for Features<'_, '_> {
+    type Value = ();
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Features<'_, '_> {
+    type Value = ();
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("an array of features")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        loop {
+            let next = self.0.geojson.borrow().as_ref().map(|r| r.next_index());
+            *self.0.feature.borrow_mut() = next;
+            let Some(f) = seq.next_element::<FeatureIn>()? else {
+                break;
+            };
+            let mut g = self.0.geojson.borrow_mut();
+            if let Some(reader) = g.as_mut() {
+                if let Err(e) = reader.feature(f) {
+                    *self.0.failure.borrow_mut() = Some(e);
+                    return Err(serde::de::Error::custom("stopped"));
+                }
+            }
+        }
+        *self.0.feature.borrow_mut() = None;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str) -> Result<(FileRead, &'static str), LoadError> {
+        let opts = ReadOptions {
+            height_attr: Some("h".into()),
+            ..ReadOptions::default()
+        };
+        read_json(Path::new("t.geojson"), text.as_bytes(), &opts)
+    }
+
+    const SQUARE: &str = r#"{"type":"Polygon","coordinates":[[[0,0],[1,0],[1,1],[0,1],[0,0]]]}"#;
+
+    #[test]
+    fn key_order_does_not_matter() {
+        let text = format!(
+            r#"{{"features":[{{"type":"Feature","properties":{{"h":3}},"geometry":{SQUARE}}}],"type":"FeatureCollection"}}"#
+        );
+        let (r, fmt) = read(&text).unwrap();
+        assert_eq!(fmt, "GeoJSON");
+        assert_eq!(r.objects.len(), 1);
+    }
+
+    #[test]
+    fn single_feature_document() {
+        let text =
+            format!(r#"{{"type":"Feature","id":"x","properties":{{"h":3}},"geometry":{SQUARE}}}"#);
+        let (r, _) = read(&text).unwrap();
+        assert_eq!(r.objects[0].name, "x");
+    }
+
+    #[test]
+    fn features_must_be_an_array() {
+        let e = read(r#"{"type":"FeatureCollection","features":{}}"#).unwrap_err();
+        assert!(matches!(e.kind, LoadErrorKind::MalformedJson(_)), "{e}");
+    }
+
+    #[test]
+    fn trailing_garbage_is_malformed() {
+        let e = read(r#"{"type":"FeatureCollection","features":[]} x"#).unwrap_err();
+        assert!(matches!(e.kind, LoadErrorKind::MalformedJson(_)), "{e}");
+        assert!(matches!(e.location, Location::Line { line: 1, .. }));
+    }
+
+    #[test]
+    fn a_feature_error_stops_the_stream_with_its_index() {
+        let text = format!(
+            r#"{{"type":"FeatureCollection","features":[
+            {{"type":"Feature","properties":{{"h":3}},"geometry":{SQUARE}}},
+            {{"type":"Feature","properties":{{"h":"x"}},"geometry":{SQUARE}}},
+            {{"type":"Feature","properties":{{"h":3}},"geometry":{SQUARE}}}]}}"#
+        );
+        let e = read(&text).unwrap_err();
+        assert_eq!(e.location, Location::Feature(1));
+    }
+}
