@@ -242,12 +242,16 @@ fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<
         Ok(())
     };
     section(out, "skipped objects", &s.skipped_by_reason, &s.skipped)?;
-    section(
+    // Repairs move no point; counts are enough here, and --json lists each one.
+    writeln!(
         out,
-        &format!("repaired rings ({} objects)", s.repaired_objects),
-        &s.repaired_rings_by_kind,
-        &s.repaired,
+        "repaired rings: {} in {} objects (--json lists each)",
+        s.repaired.len(),
+        s.repaired_objects
     )?;
+    for (k, v) in &s.repaired_rings_by_kind {
+        writeln!(out, "  {v:>6}  {k}")?;
+    }
     section(
         out,
         "geometry that gave no blocker",

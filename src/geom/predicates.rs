@@ -197,6 +197,137 @@ fn winding_turns_once(poly: &[DVec2]) -> bool {
     crossings == 1
 }
 
+/// Exact test: does the closed segment `[a, b]` meet the closed convex polygon `poly`
+/// (counter-clockwise, non-degenerate)?
+pub fn segment_meets_convex(a: DVec2, b: DVec2, poly: &[DVec2]) -> bool {
+    if point_in_convex(poly, a) != Containment::Outside
+        || point_in_convex(poly, b) != Containment::Outside
+    {
+        return true;
+    }
+    (0..poly.len()).any(|i| {
+        segment_intersection(a, b, poly[i], poly[(i + 1) % poly.len()])
+            != SegmentIntersection::Disjoint
+    })
+}
+
+/// The extreme vertices of a convex polygon as seen from a point outside it: `(l, r)` with every
+/// vertex `v` satisfying `orient(q, l, v) != Cw` and `orient(q, v, r) != Cw`, so the polygon is
+/// seen within the counter-clockwise angle from the direction of `poly[l]` to that of `poly[r]`
+/// (less than a half-turn). `None` when `q` is inside the polygon or on its boundary.
+/// Among vertices in the same direction, the nearest to `q` is returned.
+pub fn tangent_vertices(q: DVec2, poly: &[DVec2]) -> Option<(usize, usize)> {
+    if point_in_convex(poly, q) != Containment::Outside {
+        return None;
+    }
+    let closer =
+        |i: usize, j: usize| (poly[i] - q).length_squared() < (poly[j] - q).length_squared();
+    let (mut l, mut r) = (0, 0);
+    for i in 1..poly.len() {
+        match orient(q, poly[l], poly[i]) {
+            Orientation::Cw => l = i,
+            Orientation::Collinear if closer(i, l) => l = i,
+            _ => {}
+        }
+        match orient(q, poly[r], poly[i]) {
+            Orientation::Ccw => r = i,
+            Orientation::Collinear if closer(i, r) => r = i,
+            _ => {}
+        }
+    }
+    Some((l, r))
+}
+
+/// Which side of a directed line a set lies on, with touching allowed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SetSide {
+    /// Every point is left of or on the line.
+    Left,
+    /// Every point is right of or on the line.
+    Right,
+    /// Points lie strictly on both sides.
+    Both,
+}
+
+/// Exact side of a polygon's vertices (so, of the polygon) relative to the directed line `a -> b`.
+pub fn set_side(a: DVec2, b: DVec2, pts: &[DVec2]) -> SetSide {
+    let (mut left, mut right) = (false, false);
+    for &p in pts {
+        match orient(a, b, p) {
+            Orientation::Ccw => left = true,
+            Orientation::Cw => right = true,
+            Orientation::Collinear => {}
+        }
+    }
+    match (left, right) {
+        (true, true) => SetSide::Both,
+        (false, true) => SetSide::Right,
+        // All on the line counts as left; callers pass polygons of non-zero area.
+        _ => SetSide::Left,
+    }
+}
+
+/// A common tangent of two convex polygons `p` and `q`: the directed line from vertex `p[i]` to
+/// vertex `q[j]`, with each polygon wholly on one closed side of it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Tangent {
+    pub i: usize,
+    pub j: usize,
+}
+
+/// The four common tangents of disjoint-interior convex polygons `p` and `q`, each directed from a
+/// vertex of `p` to a vertex of `q`:
+/// - `outer_left`: both polygons on its right (seen from `p` looking at `q`, it passes on their
+///   left), and `outer_right`: both on its left. These bound `q`'s umbra from `p`.
+/// - `cross_left`: `p` on its left, `q` on its right (it leaves `p` on the right and passes `q`
+///   on the left), and `cross_right`: `p` on its right, `q` on its left. These bound the penumbra.
+///
+/// Found by exact orientation tests over all vertex pairs; a tangent through collinear vertices
+/// takes the pair nearest each other. `None` for a tangent that does not exist (overlapping
+/// polygons have no crossing tangents).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CommonTangents {
+    pub outer_left: Option<Tangent>,
+    pub outer_right: Option<Tangent>,
+    pub cross_left: Option<Tangent>,
+    pub cross_right: Option<Tangent>,
+}
+
+/// Computes the common tangents of `p` and `q`. See [`CommonTangents`].
+pub fn common_tangents(p: &[DVec2], q: &[DVec2]) -> CommonTangents {
+    let mut out = CommonTangents {
+        outer_left: None,
+        outer_right: None,
+        cross_left: None,
+        cross_right: None,
+    };
+    let len = |t: &Option<Tangent>| t.map(|t| (q[t.j] - p[t.i]).length_squared());
+    let mut keep = |slot: &mut Option<Tangent>, t: Tangent| {
+        let d = (q[t.j] - p[t.i]).length_squared();
+        if len(slot).is_none_or(|old| d < old) {
+            *slot = Some(t);
+        }
+    };
+    for i in 0..p.len() {
+        for j in 0..q.len() {
+            if p[i] == q[j] {
+                continue;
+            }
+            let t = Tangent { i, j };
+            let sp = set_side(p[i], q[j], p);
+            let sq = set_side(p[i], q[j], q);
+            match (sp, sq) {
+                (SetSide::Right, SetSide::Right) => keep(&mut out.outer_left, t),
+                (SetSide::Left, SetSide::Left) => keep(&mut out.outer_right, t),
+                (SetSide::Left, SetSide::Right) => keep(&mut out.cross_left, t),
+                (SetSide::Right, SetSide::Left) => keep(&mut out.cross_right, t),
+                _ => {}
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -300,5 +431,59 @@ mod tests {
         let c = [v(0.5, 0.5), v(1.5, 0.5), v(1.5, 1.5)];
         assert!(convex_interiors_disjoint(&a, &b));
         assert!(!convex_interiors_disjoint(&a, &c));
+    }
+
+    #[test]
+    fn segment_meets_convex_cases() {
+        let sq = [v(0.0, 0.0), v(2.0, 0.0), v(2.0, 2.0), v(0.0, 2.0)];
+        assert!(segment_meets_convex(v(-1.0, 1.0), v(3.0, 1.0), &sq));
+        assert!(segment_meets_convex(v(1.0, 1.0), v(1.5, 1.5), &sq));
+        assert!(
+            segment_meets_convex(v(-1.0, 2.0), v(3.0, 2.0), &sq),
+            "touching counts"
+        );
+        assert!(!segment_meets_convex(
+            v(-1.0, 2.0000001),
+            v(3.0, 2.0000001),
+            &sq
+        ));
+        assert!(!segment_meets_convex(v(3.0, 0.0), v(3.0, 2.0), &sq));
+    }
+
+    #[test]
+    fn tangent_vertices_from_outside() {
+        let sq = [v(0.0, 0.0), v(2.0, 0.0), v(2.0, 2.0), v(0.0, 2.0)];
+        // Seen from below: the angle runs from (2,0) counter-clockwise to (0,0).
+        let (l, r) = tangent_vertices(v(1.0, -5.0), &sq).unwrap();
+        for &x in &sq {
+            assert_ne!(orient(v(1.0, -5.0), sq[l], x), Orientation::Cw);
+            assert_ne!(orient(v(1.0, -5.0), x, sq[r]), Orientation::Cw);
+        }
+        assert_eq!((l, r), (1, 0));
+        // Collinear vertices along the tangent: the nearer one is returned.
+        let (l, r) = tangent_vertices(v(4.0, 0.0), &sq).unwrap();
+        assert_eq!((sq[l], sq[r]), (v(2.0, 2.0), v(2.0, 0.0)));
+        assert_eq!(tangent_vertices(v(1.0, 1.0), &sq), None);
+        assert_eq!(tangent_vertices(v(2.0, 1.0), &sq), None);
+    }
+
+    #[test]
+    fn common_tangents_of_two_squares() {
+        // Cell at the origin, blocker straight ahead (+y).
+        let c = [v(-0.5, -0.5), v(0.5, -0.5), v(0.5, 0.5), v(-0.5, 0.5)];
+        let b = [v(-0.5, 9.5), v(0.5, 9.5), v(0.5, 10.5), v(-0.5, 10.5)];
+        let t = common_tangents(&c, &b);
+        let ol = t.outer_left.unwrap();
+        assert_eq!((c[ol.i], b[ol.j]), (v(-0.5, 0.5), v(-0.5, 9.5)));
+        let or = t.outer_right.unwrap();
+        assert_eq!((c[or.i], b[or.j]), (v(0.5, 0.5), v(0.5, 9.5)));
+        let cl = t.cross_left.unwrap();
+        assert_eq!((c[cl.i], b[cl.j]), (v(0.5, 0.5), v(-0.5, 9.5)));
+        let cr = t.cross_right.unwrap();
+        assert_eq!((c[cr.i], b[cr.j]), (v(-0.5, 0.5), v(0.5, 9.5)));
+        // Overlapping polygons have no crossing tangent.
+        let o = [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
+        let t = common_tangents(&c, &o);
+        assert!(t.cross_left.is_none() && t.cross_right.is_none());
     }
 }
