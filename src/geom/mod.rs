@@ -4,5 +4,6 @@
 //! floating-point arithmetic to decide topology or occlusion.
 
 pub mod predicates;
+pub mod verify;
 
 pub use predicates::{Containment, Orientation, SegmentIntersection};

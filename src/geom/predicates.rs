@@ -302,7 +302,7 @@ pub fn common_tangents(p: &[DVec2], q: &[DVec2]) -> CommonTangents {
         cross_right: None,
     };
     let len = |t: &Option<Tangent>| t.map(|t| (q[t.j] - p[t.i]).length_squared());
-    let mut keep = |slot: &mut Option<Tangent>, t: Tangent| {
+    let keep = |slot: &mut Option<Tangent>, t: Tangent| {
         let d = (q[t.j] - p[t.i]).length_squared();
         if len(slot).is_none_or(|old| d < old) {
             *slot = Some(t);
