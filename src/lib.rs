@@ -17,6 +17,8 @@
 pub mod runtime;
 
 #[cfg(feature = "bake")]
+pub mod bake;
+#[cfg(feature = "bake")]
 pub mod geom;
 #[cfg(feature = "bake")]
 pub mod scene;

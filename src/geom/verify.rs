@@ -42,7 +42,9 @@
 //! Other pieces of `s` are bisected at their midpoints, but only where the midpoint is exactly
 //! representable (checked; it then lies exactly on `s`), down to [`MIN_PIECE_M`]. For a piece, a
 //! candidate certificate is read off at one exact point of it (the tangent vertices of each
-//! blocker in front, then a greedy cover of the cell's angle), and checked exactly at both ends.
+//! blocker in front, then the shortest chain of overlapping chords that covers the cell's angle,
+//! by breadth-first search; if its extreme chords overshoot a half-turn, the same chain with
+//! chords trimmed to the vertices it needs), and checked exactly at both ends.
 //! Pieces that cannot be certified count as visible: the output can only be smaller than the true
 //! hidden set, never larger.
 
@@ -82,12 +84,14 @@ impl SepLine {
     }
 }
 
-/// One link of a certificate.
+/// One link of a certificate: a chord `[l, r]` of blocker `poly` (an index into the blockers
+/// near the segment) and its separating line.
 #[derive(Clone, Copy, Debug)]
 struct Link {
     l: DVec2,
     r: DVec2,
     sep: SepLine,
+    poly: usize,
 }
 
 /// The verifier for one cell and one set of blockers.
@@ -164,10 +168,67 @@ impl<'a> Verifier<'a> {
         }
         let anchor = exact_midpoint(p0, p1).unwrap_or(p0);
         let pts = [anchor, p0, p1];
-        match self.chain(near, &pts) {
-            Some(links) => pts.iter().all(|&q| self.holds(&links, q)),
-            None => false,
+        let Some(links) = self.chain(near, &pts) else {
+            return false;
+        };
+        if pts.iter().all(|&q| self.holds(&links, q)) {
+            return true;
         }
+        // Extreme chords can overshoot the cell's angle so far that the directions used span
+        // more than a half-turn (W fails); chords trimmed to what is needed may not.
+        let trimmed = self.trim(near, &links, anchor);
+        pts.iter().all(|&q| self.holds(&trimmed, q))
+    }
+
+    /// Shrinks each chord of a chain, seen from `q`, to the blocker vertices it needs: the first
+    /// chord starts at the last vertex not past the cell's first direction, each next chord at
+    /// its last vertex not past the previous chord's end, and ends are pulled back the same way.
+    /// A heuristic choice of vertices only: the result is checked exactly by the caller.
+    fn trim(&self, near: &[&[DVec2]], links: &[Link], q: DVec2) -> Vec<Link> {
+        use Orientation::*;
+        let Some((cl, cr)) = tangent_vertices(q, self.cell) else {
+            return links.to_vec();
+        };
+        let (cl, cr) = (self.cell[cl], self.cell[cr]);
+        let cw_of = |a: DVec2, b: DVec2| orient(q, a, b) != Cw; // a at or clockwise of b
+                                                                // The most counter-clockwise vertex of `poly` at or clockwise of `limit`, else `keep`.
+        let last_before = |poly: &[DVec2], limit: DVec2, keep: DVec2| {
+            poly.iter()
+                .copied()
+                .filter(|&v| cw_of(v, limit))
+                .fold(None, |best: Option<DVec2>, v| match best {
+                    Some(b) if orient(q, b, v) != Ccw => Some(b),
+                    _ => Some(v),
+                })
+                .unwrap_or(keep)
+        };
+        // The most clockwise vertex of `poly` at or counter-clockwise of `limit`, else `keep`.
+        let first_after = |poly: &[DVec2], limit: DVec2, keep: DVec2| {
+            poly.iter()
+                .copied()
+                .filter(|&v| cw_of(limit, v))
+                .fold(None, |best: Option<DVec2>, v| match best {
+                    Some(b) if orient(q, v, b) != Ccw => Some(b),
+                    _ => Some(v),
+                })
+                .unwrap_or(keep)
+        };
+        let mut out = links.to_vec();
+        let m = out.len();
+        out[0].l = last_before(near[out[0].poly], cl, out[0].l);
+        for k in 1..m {
+            out[k].l = last_before(near[out[k].poly], out[k - 1].r, out[k].l);
+        }
+        out[m - 1].r = first_after(near[out[m - 1].poly], cr, out[m - 1].r);
+        for k in (0..m - 1).rev() {
+            out[k].r = first_after(near[out[k].poly], out[k + 1].l, out[k].r);
+        }
+        for (t, o) in out.iter_mut().zip(links) {
+            if orient(q, t.l, t.r) != Ccw {
+                *t = *o;
+            }
+        }
+        out
     }
 
     /// The shortest chain of blocker chords whose conditions (S), (A), (O) and (C) hold at every
@@ -180,7 +241,7 @@ impl<'a> Verifier<'a> {
         tangent_vertices(q, self.cell)?;
         let all = |f: &dyn Fn(DVec2) -> bool| pts.iter().all(|&p| f(p));
         let mut arcs: Vec<Link> = Vec::new();
-        for b in near {
+        for (poly, b) in near.iter().enumerate() {
             let Some((l, r)) = tangent_vertices(q, b) else {
                 continue;
             };
@@ -191,7 +252,7 @@ impl<'a> Verifier<'a> {
             let Some(sep) = separating_line(b, self.cell, pts) else {
                 continue;
             };
-            arcs.push(Link { l, r, sep });
+            arcs.push(Link { l, r, sep, poly });
         }
         let starts = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, k.l, c) != Cw));
         let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, c, k.r) != Cw));
