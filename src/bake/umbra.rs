@@ -649,31 +649,63 @@ fn clip_snap(planes: &[HalfPlane], o: DVec2, dir: DVec2) -> Option<(DVec2, DVec2
     None
 }
 
-/// Grows the dense VO set of one cell and passes it through the exact verifier.
-pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellVos {
-    let centre = cell.iter().copied().sum::<DVec2>() / cell.len() as f64;
+/// The blockers the growth of a cell may use: within the search distance, not overlapping it.
+fn usable(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> Vec<u32> {
     let (lo, hi) = bounds(cell);
     let r = DVec2::splat(params.search_m);
-    let near: Vec<u32> = set
+    let mut near: Vec<u32> = set
         .in_box(lo - r, hi + r)
         .filter(|&id| convex_interiors_disjoint(&set.polys[id as usize], cell))
         .collect();
-    let mut g = Grower {
+    near.sort_unstable();
+    near
+}
+
+fn grower<'a>(
+    cell: &'a [DVec2],
+    set: &'a BlockerSet,
+    params: &'a GrowParams,
+    near: &[u32],
+) -> Grower<'a> {
+    Grower {
         cell,
-        centre,
+        centre: cell.iter().copied().sum::<DVec2>() / cell.len() as f64,
         set,
         params,
         usable: near.iter().copied().collect(),
         cell_tangents: HashMap::new(),
         pair_tangents: HashMap::new(),
-    };
-    let mut near_sorted = near.clone();
-    near_sorted.sort_unstable();
+    }
+}
+
+/// Grows from one given seed (for tests and pictures); the VOs are not yet verified.
+pub fn grow_seed(
+    cell: &[DVec2],
+    set: &BlockerSet,
+    params: &GrowParams,
+    seed: u32,
+) -> (Vec<Vo>, SeedTrace) {
+    let near = usable(cell, set, params);
+    grower(cell, set, params, &near).grow(seed)
+}
+
+/// Grows the dense VO set of one cell and passes it through the exact verifier.
+pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellVos {
+    let near_sorted = usable(cell, set, params);
+    let mut g = grower(cell, set, params, &near_sorted);
     let seeds = seed::seeds(cell, set, &near_sorted, params.seeds);
     let mut out = CellVos::default();
     let mut dense: Vec<Vo> = Vec::new();
+    let mut grown: HashSet<u32> = HashSet::new();
     for s in seeds {
+        // A seed already inside a grown cluster would grow the same cluster again.
+        if grown.contains(&s) {
+            continue;
+        }
         let (vos, trace) = g.grow(s);
+        if let Some(last) = trace.steps.last() {
+            grown.extend(last.chain.iter().copied());
+        }
         dense.extend(vos);
         out.traces.push(trace);
     }
