@@ -25,14 +25,14 @@
 //! ## Why every VO is hidden (the chain certificate)
 //! For a chain with fixed vertex choices — `l_1` where the left outer tangent touches `B_1`,
 //! `r_m` where the right one touches `B_m`, and for each join the two contacts `r_k`, `l_{k+1}`
-//! of a crossing tangent of `B_k` and `B_{k+1}` — plus a separating line `L_k` between each `B_k`
-//! and the cell, and window vertices `W`, `X`, the set of points `q` with
+//! of a crossing tangent of `B_k` and `B_{k+1}`, or a vertex they share — plus a separating line
+//! `L_k` between each `B_k` and the cell, the set of points `q` with
 //! - `q` strictly on `B_k`'s side of `L_k`,
 //! - `orient(q, l_k, r_k) = Ccw` (behind each chord),
-//! - `orient(q, l_{k+1}, r_k) != Cw` (each join seen closed),
+//! - `orient(q, l_{k+1}, r_k) != Cw` and `orient(q, r_k, r_{k+1}) != Cw` (each join seen
+//!   closed: `r_k` lies in the next arc),
 //! - `orient(q, l_1, c) != Cw` and `orient(q, c, r_m) != Cw` for every cell vertex `c`
 //!   (between the supporting lines),
-//! - all used directions within the half-turn from `W` to `X`,
 //! is an intersection of half-planes through input vertices, hence convex, and every point of it
 //! is hidden: the chords' angular intervals overlap in a chain that covers the cell's angle, and
 //! each chord's blocker lies between `q` and the cell (the argument of the verifier's Lemma 1,
@@ -145,8 +145,9 @@ pub struct SeedTrace {
 pub struct CellVos {
     /// The dense set, every VO verified.
     pub vos: Vec<Vo>,
-    /// VOs the verifier had to cut or drop (must be 0).
+    /// VOs the verifier had to cut or drop (must be 0), as the growth emitted them.
     pub rejected: usize,
+    pub rejected_vos: Vec<Vo>,
     pub traces: Vec<SeedTrace>,
 }
 
@@ -253,9 +254,15 @@ impl<'a> Grower<'a> {
                 strict: true,
             });
             if k + 1 < m {
+                // The chord's end lies in the next arc.
                 planes.push(HalfPlane {
                     u: ls[k + 1],
                     v: rs[k],
+                    strict: false,
+                });
+                planes.push(HalfPlane {
+                    u: rs[k],
+                    v: rs[k + 1],
                     strict: false,
                 });
             }
@@ -272,43 +279,6 @@ impl<'a> Grower<'a> {
                 v: rs[m - 1],
                 strict: false,
             });
-        }
-        // Window: the most clockwise and most counter-clockwise directions used, seen from q.
-        let pts: Vec<DVec2> = ls
-            .iter()
-            .chain(rs.iter())
-            .chain(self.cell.iter())
-            .copied()
-            .collect();
-        let (mut w, mut x) = (pts[0], pts[0]);
-        for &p in &pts {
-            if orient(q, w, p) == Cw {
-                w = p;
-            }
-            if orient(q, x, p) == Ccw {
-                x = p;
-            }
-        }
-        planes.push(HalfPlane {
-            u: w,
-            v: x,
-            strict: true,
-        });
-        for &p in &pts {
-            if p != w {
-                planes.push(HalfPlane {
-                    u: w,
-                    v: p,
-                    strict: false,
-                });
-            }
-            if p != x {
-                planes.push(HalfPlane {
-                    u: p,
-                    v: x,
-                    strict: false,
-                });
-            }
         }
         if !planes.iter().all(|h| h.holds(q)) {
             return None;
@@ -732,6 +702,7 @@ pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellV
             continue;
         }
         out.rejected += 1;
+        out.rejected_vos.push(v.clone());
         let parts = ver.hidden_parts(v.a, v.b);
         if let Some(h) = parts
             .iter()

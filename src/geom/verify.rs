@@ -10,28 +10,28 @@
 //! shares no code with the occluder growth except [`super::predicates`].
 //!
 //! ## The certificate
-//! For a point `q` outside `C`, a *certificate* is a chain of blockers `B_1..B_m`, each with a
-//! chord `[l_k, r_k]` between two of its vertices and a separating line `L_k` between `B_k` and
-//! `C` through two input vertices, plus two window vertices `W`, `X`. It holds at `q` when
-//! (every test an exact orientation of `q` against two input vertices):
+//! For a point `q`, a *certificate* is a chain of blockers `B_1..B_m`, each with a chord
+//! `[l_k, r_k]` between two of its vertices and a separating line `L_k` between `B_k` and `C`
+//! through two input vertices. It holds at `q` when (every test an exact orientation of `q`
+//! against two input vertices):
 //! - (S) `q` lies strictly on `B_k`'s side of `L_k`, for every k;
 //! - (A) `orient(q, l_k, r_k) = Ccw`: `q` sees the chord under a counter-clockwise angle below a
-//!   half-turn, for every k;
-//! - (W) `orient(q, W, X) = Ccw` and every chord end and cell vertex `v` has
-//!   `orient(q, W, v) != Cw` and `orient(q, v, X) != Cw`: all directions used lie in one
-//!   half-turn, where orientation is angle order;
-//! - (O) `orient(q, l_{k+1}, r_k) != Cw`: consecutive chord arcs overlap or touch;
+//!   half-turn (the arc `[l_k, r_k]`), for every k;
+//! - (O) `orient(q, l_{k+1}, r_k) != Cw` and `orient(q, r_k, r_{k+1}) != Cw`: the direction of
+//!   `r_k` lies in the next arc (exact, as that arc is below a half-turn);
 //! - (C) every cell vertex `c` has `orient(q, l_1, c) != Cw` and `orient(q, c, r_m) != Cw`.
 //!
-//! **Lemma 1.** If a certificate holds at `q`, then `q` is hidden. *Proof.* By (W) directions
-//! compare as angles. By (O) and induction, the union of the arcs `[l_1, r_k]..` covers
-//! `[l_1, r_m]`: if it covers `[l_1, r_k]` and `l_{k+1} <= r_k`, adding `[l_{k+1}, r_{k+1}]`
-//! covers `[l_1, max(r_k, r_{k+1})]`. By (C) every cell vertex, hence (C convex, `q` outside it
-//! by (S)) every point `c` of `C`, is seen in `[l_1, r_m]`, so in some arc `k`. By (A) the ray
-//! from `q` towards `c` crosses the chord `[l_k, r_k]`, which lies in `B_k`, at a point `x`. By
-//! (S) `q` is strictly on `B_k`'s side of `L_k` and `c` on the other closed side, so the ray
-//! crosses `L_k` once, at or before `c`, and `x` (on `B_k`'s closed side) comes no later. So the
-//! segment `[q, c]` contains `x`. ∎
+//! **Lemma 1.** If a certificate holds at `q`, then `q` is hidden. *Proof.* By (O) and induction
+//! the arcs cover the counter-clockwise sweep from `l_1` to `r_m`: if they cover the sweep to
+//! `r_k`, and `r_k` lies in `[l_{k+1}, r_{k+1}]`, adding that arc extends it to `r_{k+1}`. Let the
+//! sweep turn through `σ`. Each cell vertex lies within a half-turn counter-clockwise of `l_1` and
+//! within a half-turn clockwise of `r_m` (C); if `σ >= π` the first puts it in the sweep, and if
+//! `σ < π` the two together do. `q` is outside `C` (by (S), `C` is on the other closed side of
+//! `L_1`), so `C` is seen within the angular hull of its vertices, hence inside the sweep: the
+//! direction to any `c` in `C` lies in some arc `k`. By (A) the ray from `q` towards `c` crosses
+//! the chord `[l_k, r_k]`, which lies in `B_k`, at a point `x`. By (S) `q` is strictly on
+//! `B_k`'s side of `L_k` and `c` on the other closed side, so the ray crosses `L_k` once, at or
+//! before `c`, and `x` (on `B_k`'s closed side) comes no later. So `[q, c]` contains `x`. ∎
 //!
 //! **Lemma 2.** Each condition is `f(q) > 0` or `f(q) >= 0` for an affine `f` (the orientation
 //! determinant is affine in `q`), so a certificate that holds at both ends of a segment holds at
@@ -43,8 +43,8 @@
 //! representable (checked; it then lies exactly on `s`), down to [`MIN_PIECE_M`]. For a piece, a
 //! candidate certificate is read off at one exact point of it (the tangent vertices of each
 //! blocker in front, then the shortest chain of overlapping chords that covers the cell's angle,
-//! by breadth-first search; if its extreme chords overshoot a half-turn, the same chain with
-//! chords trimmed to the vertices it needs), and checked exactly at both ends.
+//! by breadth-first search, joining blockers that share a vertex through it), and checked exactly
+//! at both ends.
 //! Pieces that cannot be certified count as visible: the output can only be smaller than the true
 //! hidden set, never larger.
 
@@ -168,95 +168,76 @@ impl<'a> Verifier<'a> {
         }
         let anchor = exact_midpoint(p0, p1).unwrap_or(p0);
         let pts = [anchor, p0, p1];
-        let Some(links) = self.chain(near, &pts) else {
-            return false;
-        };
-        if pts.iter().all(|&q| self.holds(&links, q)) {
-            return true;
+        match self.chain(near, &pts) {
+            Some(links) => pts.iter().all(|&q| self.holds(&links, q)),
+            None => false,
         }
-        // Extreme chords can overshoot the cell's angle so far that the directions used span
-        // more than a half-turn (W fails); chords trimmed to what is needed may not.
-        let trimmed = self.trim(near, &links, anchor);
-        pts.iter().all(|&q| self.holds(&trimmed, q))
-    }
-
-    /// Shrinks each chord of a chain, seen from `q`, to the blocker vertices it needs: the first
-    /// chord starts at the last vertex not past the cell's first direction, each next chord at
-    /// its last vertex not past the previous chord's end, and ends are pulled back the same way.
-    /// A heuristic choice of vertices only: the result is checked exactly by the caller.
-    fn trim(&self, near: &[&[DVec2]], links: &[Link], q: DVec2) -> Vec<Link> {
-        use Orientation::*;
-        let Some((cl, cr)) = tangent_vertices(q, self.cell) else {
-            return links.to_vec();
-        };
-        let (cl, cr) = (self.cell[cl], self.cell[cr]);
-        let cw_of = |a: DVec2, b: DVec2| orient(q, a, b) != Cw; // a at or clockwise of b
-                                                                // The most counter-clockwise vertex of `poly` at or clockwise of `limit`, else `keep`.
-        let last_before = |poly: &[DVec2], limit: DVec2, keep: DVec2| {
-            poly.iter()
-                .copied()
-                .filter(|&v| cw_of(v, limit))
-                .fold(None, |best: Option<DVec2>, v| match best {
-                    Some(b) if orient(q, b, v) != Ccw => Some(b),
-                    _ => Some(v),
-                })
-                .unwrap_or(keep)
-        };
-        // The most clockwise vertex of `poly` at or counter-clockwise of `limit`, else `keep`.
-        let first_after = |poly: &[DVec2], limit: DVec2, keep: DVec2| {
-            poly.iter()
-                .copied()
-                .filter(|&v| cw_of(limit, v))
-                .fold(None, |best: Option<DVec2>, v| match best {
-                    Some(b) if orient(q, v, b) != Ccw => Some(b),
-                    _ => Some(v),
-                })
-                .unwrap_or(keep)
-        };
-        let mut out = links.to_vec();
-        let m = out.len();
-        out[0].l = last_before(near[out[0].poly], cl, out[0].l);
-        for k in 1..m {
-            out[k].l = last_before(near[out[k].poly], out[k - 1].r, out[k].l);
-        }
-        out[m - 1].r = first_after(near[out[m - 1].poly], cr, out[m - 1].r);
-        for k in (0..m - 1).rev() {
-            out[k].r = first_after(near[out[k].poly], out[k + 1].l, out[k].r);
-        }
-        for (t, o) in out.iter_mut().zip(links) {
-            if orient(q, t.l, t.r) != Ccw {
-                *t = *o;
-            }
-        }
-        out
     }
 
     /// The shortest chain of blocker chords whose conditions (S), (A), (O) and (C) hold at every
     /// point of `pts`, by breadth-first search over the chords seen from `pts[0]`. Any chain
     /// that is valid with fewer blockers is still found with more, so adding a blocker never
-    /// loses a certificate (up to the window condition (W), checked afterwards).
+    /// loses a certificate.
     fn chain(&self, near: &[&[DVec2]], pts: &[DVec2; 3]) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
-        tangent_vertices(q, self.cell)?;
+        let (cl, cr) = tangent_vertices(q, self.cell)?;
+        let (cl, cr) = (self.cell[cl], self.cell[cr]);
         let all = |f: &dyn Fn(DVec2) -> bool| pts.iter().all(|&p| f(p));
         let mut arcs: Vec<Link> = Vec::new();
         for (poly, b) in near.iter().enumerate() {
             let Some((l, r)) = tangent_vertices(q, b) else {
                 continue;
             };
-            let (l, r) = (b[l], b[r]);
-            if !all(&|p| orient(p, l, r) == Ccw) {
+            // Only arcs that meet the cell's angle from q can be links (a cheap filter before
+            // the separating line; the conditions below decide).
+            if orient(q, cl, b[r]) == Cw || orient(q, b[l], cr) == Cw {
                 continue;
             }
-            let Some(sep) = separating_line(b, self.cell, pts) else {
-                continue;
-            };
-            arcs.push(Link { l, r, sep, poly });
+            // Chords from the extreme vertices seen from each test point: near an umbra
+            // boundary, nearly collinear vertices trade places within millimetres.
+            let mut ls = vec![b[l]];
+            let mut rs = vec![b[r]];
+            for &p in &pts[1..] {
+                if let Some((l, r)) = tangent_vertices(p, b) {
+                    if !ls.contains(&b[l]) {
+                        ls.push(b[l]);
+                    }
+                    if !rs.contains(&b[r]) {
+                        rs.push(b[r]);
+                    }
+                }
+            }
+            let mut sep = None;
+            for &l in &ls {
+                for &r in &rs {
+                    if !all(&|p| orient(p, l, r) == Ccw) {
+                        continue;
+                    }
+                    if sep.is_none() {
+                        sep = Some(separating_line(b, self.cell, pts));
+                    }
+                    if let Some(Some(sep)) = sep {
+                        arcs.push(Link { l, r, sep, poly });
+                    }
+                }
+            }
         }
         let starts = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, k.l, c) != Cw));
         let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, c, k.r) != Cw));
-        let overlaps = |a: &Link, b: &Link| all(&|p| orient(p, b.l, a.r) != Cw);
+        let overlaps =
+            |a: &Link, b: &Link| all(&|p| orient(p, b.l, a.r) != Cw && orient(p, a.r, b.r) != Cw);
+        // Blockers that share a vertex `v` join through it: the chords `[a.l, v]` and `[v, b.r]`
+        // (each valid by (A)) make (O) hold trivially. Adjacent convex pieces of one footprint, and
+        // buildings that share a wall, meet like this; across the line of a shared edge the
+        // extreme vertices swap, and only such a join certifies both sides at once.
+        let shared = |a: &Link, b: &Link| -> Option<DVec2> {
+            let (pa, pb) = (near[a.poly], near[b.poly]);
+            pa.iter().copied().find(|v| {
+                pb.contains(v) && all(&|p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
+            })
+        };
+        let joins = |a: &Link, b: &Link| overlaps(a, b) || shared(a, b).is_some();
         // Breadth-first from every start arc; `prev` records the path.
         let n = arcs.len();
         let mut prev: Vec<Option<usize>> = vec![None; n];
@@ -277,10 +258,18 @@ impl<'a> Verifier<'a> {
                     k = j;
                 }
                 path.reverse();
+                for k in 0..path.len() - 1 {
+                    if !overlaps(&path[k], &path[k + 1]) {
+                        if let Some(v) = shared(&path[k], &path[k + 1]) {
+                            path[k].r = v;
+                            path[k + 1].l = v;
+                        }
+                    }
+                }
                 return Some(path);
             }
             for j in 0..n {
-                if !seen[j] && overlaps(&arcs[i], &arcs[j]) {
+                if !seen[j] && joins(&arcs[i], &arcs[j]) {
                     seen[j] = true;
                     prev[j] = Some(i);
                     queue.push_back(j);
@@ -297,28 +286,14 @@ impl<'a> Verifier<'a> {
         if links.is_empty() || links.iter().any(|k| !k.sep.holds(q) || o(k.l, k.r) != Ccw) {
             return false;
         }
-        // (W): window from the most clockwise to the most counter-clockwise direction used.
-        let pts = links
-            .iter()
-            .flat_map(|k| [k.l, k.r])
-            .chain(self.cell.iter().copied());
-        let (mut w, mut x) = (links[0].l, links[0].r);
-        for p in pts.clone() {
-            if o(w, p) == Cw {
-                w = p;
-            }
-            if o(x, p) == Ccw {
-                x = p;
-            }
-        }
-        if o(w, x) != Ccw || pts.clone().any(|p| o(w, p) == Cw || o(p, x) == Cw) {
+        // (O): each chord's end lies in the next arc.
+        if links
+            .windows(2)
+            .any(|p| o(p[1].l, p[0].r) == Cw || o(p[0].r, p[1].r) == Cw)
+        {
             return false;
         }
-        // (O): consecutive arcs overlap or touch.
-        if links.windows(2).any(|p| o(p[1].l, p[0].r) == Cw) {
-            return false;
-        }
-        // (C): every cell vertex inside [l_1, r_m].
+        // (C): every cell vertex inside the sweep from l_1 to r_m.
         let (l1, rm) = (links[0].l, links[links.len() - 1].r);
         self.cell.iter().all(|&c| o(l1, c) != Cw && o(c, rm) != Cw)
     }
