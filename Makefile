@@ -3,7 +3,7 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test demo bench lint fresh-clone
+.PHONY: build test demo bench lint fresh-clone pictures
 
 build:
 	$(CARGO) build --release
@@ -28,3 +28,10 @@ lint:
 # Clones the committed main into a temporary folder and runs the README's two commands there.
 fresh-clone:
 	tools/fresh-clone.sh
+
+# Regenerates the pictures in docs/img: the paper's Fig. 3 configuration and a Lyon cell.
+pictures:
+	$(CARGO) test --locked --test umbra_cases
+	cp target/tmp/umbra-cases/fig3_staggered.svg docs/img/
+	$(CARGO) run --locked --release -- render --debug $(DEMO_SCENE) --height-attr HAUTEUR \
+		--at 1842000,5176050 -o docs/img/lyon_cell_100m.svg

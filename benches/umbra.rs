@@ -2,15 +2,14 @@
 //! the verifier's rejection count, for 50, 100 and 200 m cells with one slice at mid height.
 //! `make bench` runs it (`cargo bench --bench umbra`); it prints a table.
 //!
-//! Slice: the blockers whose top reaches the slice height, which is half the median building
-//! height; every wall counts with that height for seeding.
+//! Slice: the blockers cut by the plane at half the median building height
+//! (`vocc::bake::mid_slice`).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::DVec2;
 use vocc::bake::umbra::{grow_cell, GrowParams};
-use vocc::bake::BlockerSet;
 use vocc::scene::{self, ReadOptions};
 
 fn pct(v: &mut [f64], p: f64) -> f64 {
@@ -33,19 +32,8 @@ fn main() {
         ..ReadOptions::default()
     };
     let scene = scene::load(&[path], &opts).expect("Lyon loads");
-    let mut tops: Vec<f64> = scene
-        .objects
-        .iter()
-        .map(|o| o.bbox.max.z - o.bbox.min.z)
-        .collect();
-    let slice = pct(&mut tops, 0.5) * 0.5;
-    let (polys, heights): (Vec<Vec<DVec2>>, Vec<f64>) = scene
-        .blockers
-        .iter()
-        .filter(|b| b.top >= slice && b.base <= 0.0)
-        .map(|b| (b.polygon.clone(), slice - b.base))
-        .unzip();
-    let set = BlockerSet::new(polys, heights);
+    let slice = vocc::bake::mid_slice(&scene);
+    let set = vocc::bake::slice_blockers(&scene, slice);
     let ext = scene.extent();
     println!(
         "Lyon: {} blockers at the slice z = {slice:.1} m (of {} pieces); extent {:.0} x {:.0} m",

@@ -98,3 +98,52 @@ fn gen_city_is_deterministic_and_loads() {
     assert_eq!(v["objects"], 500);
     assert_eq!(v["blocker_objects"], 500);
 }
+
+#[test]
+fn render_debug_draws_a_lyon_cell_with_verified_vos() {
+    let dir = common::temp_dir("cli_render");
+    let svg = dir.join("cell.svg");
+    let out = vocc(&[
+        "render",
+        "--debug",
+        LYON,
+        "--height-attr",
+        "HAUTEUR",
+        "--at",
+        "1842000,5176050",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"));
+    assert!(
+        text.contains("verifier rejections: 0"),
+        "the gate never fires"
+    );
+    let vos = text.matches(r#"stroke="black" stroke-width="2.5""#).count();
+    assert!(vos > 10, "{vos} VOs drawn");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("0 rejected by the verifier"), "{err}");
+}
+
+#[test]
+fn render_rejects_a_malformed_point() {
+    let out = vocc(&[
+        "render",
+        "--debug",
+        LYON,
+        "--height-attr",
+        "HAUTEUR",
+        "--at",
+        "12;34",
+        "-o",
+        "/dev/null",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("expected X,Y"));
+}

@@ -65,3 +65,49 @@ pub fn bounds(p: &[DVec2]) -> (DVec2, DVec2) {
         |(lo, hi), &v| (lo.min(v), hi.max(v)),
     )
 }
+
+/// The 2D blockers of a scene cut by the horizontal plane at height `z` (local frame): every
+/// blocker with `base <= z <= top`. Each counts with the height from its base to `z` for seeding.
+pub fn slice_blockers(scene: &crate::scene::Scene, z: f64) -> BlockerSet {
+    let (polys, heights) = scene
+        .blockers
+        .iter()
+        .filter(|b| b.base <= z && b.top >= z)
+        .map(|b| (b.polygon.clone(), z - b.base))
+        .unzip();
+    BlockerSet::new(polys, heights)
+}
+
+/// A single slice at mid height: half the median object height above the lowest object base.
+pub fn mid_slice(scene: &crate::scene::Scene) -> f64 {
+    let mut h: Vec<f64> = scene
+        .objects
+        .iter()
+        .map(|o| o.bbox.max.z - o.bbox.min.z)
+        .collect();
+    if h.is_empty() {
+        return 0.0;
+    }
+    h.sort_by(f64::total_cmp);
+    let ground = scene
+        .objects
+        .iter()
+        .map(|o| o.bbox.min.z)
+        .fold(f64::INFINITY, f64::min);
+    ground + 0.5 * h[h.len() / 2]
+}
+
+/// The square cell of side `size` that holds local point `p`, on the grid anchored at the scene
+/// extent's minimum corner; counter-clockwise.
+pub fn grid_cell(scene: &crate::scene::Scene, p: DVec2, size: f64) -> [DVec2; 4] {
+    let ext = scene.extent();
+    let o = DVec2::new(ext.min.x, ext.min.y);
+    let k = ((p - o) / size).floor();
+    let a = o + k * size;
+    [
+        a,
+        a + DVec2::new(size, 0.0),
+        a + DVec2::new(size, size),
+        a + DVec2::new(0.0, size),
+    ]
+}

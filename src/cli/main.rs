@@ -32,6 +32,30 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Draw one cell as an SVG. With --debug: the 2D growth of one slice (blockers, seeds,
+    /// supporting and separating lines, the dense VOs).
+    Render {
+        /// Draw the growth of one slice (the only mode until stores exist).
+        #[arg(long)]
+        debug: bool,
+        /// Scene files.
+        #[arg(required = true)]
+        scene: Vec<PathBuf>,
+        /// A point of the cell, in world coordinates: X,Y.
+        #[arg(long, value_name = "X,Y", value_parser = parse_xy, allow_hyphen_values = true)]
+        at: (f64, f64),
+        /// Side of the square cells, metres (grid anchored at the scene's minimum corner).
+        #[arg(long, default_value_t = 100.0, value_name = "M")]
+        cell_size: f64,
+        /// Slice height in world metres (default: half the median building height).
+        #[arg(long, value_name = "Z")]
+        slice: Option<f64>,
+        #[command(flatten)]
+        read: ReadArgs,
+        /// Output SVG file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Write a deterministic procedural city (GeoJSON footprints, attribute `height`).
     GenCity {
         /// Number of buildings.
@@ -78,6 +102,21 @@ impl ReadArgs {
     }
 }
 
+/// Parses "X,Y".
+fn parse_xy(s: &str) -> Result<(f64, f64), String> {
+    let (x, y) = s
+        .split_once(',')
+        .ok_or_else(|| format!("expected X,Y, got {s:?}"))?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("{t:?} is not a finite number"))
+    };
+    Ok((num(x)?, num(y)?))
+}
+
 fn main() {
     if let Err(e) = run(Cli::parse()) {
         eprintln!("error: {e:#}");
@@ -97,6 +136,49 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 print_summary(&mut out, &sum)?;
             }
+            Ok(())
+        }
+        Command::Render {
+            debug,
+            scene,
+            at,
+            cell_size,
+            slice,
+            read,
+            output,
+        } => {
+            anyhow::ensure!(
+                debug,
+                "only `vocc render --debug` exists so far (the store comes with the bake)"
+            );
+            anyhow::ensure!(
+                cell_size.is_finite() && cell_size > 0.0,
+                "--cell-size must be a positive number of metres"
+            );
+            let s = scene::load(&scene, &read.options())?;
+            let local = glam::DVec2::new(at.0 - s.origin.x, at.1 - s.origin.y);
+            let z = match slice {
+                Some(z) => z - s.origin.z,
+                None => vocc::bake::mid_slice(&s),
+            };
+            let set = vocc::bake::slice_blockers(&s, z);
+            let cell = vocc::bake::grid_cell(&s, local, cell_size);
+            let t = Instant::now();
+            let out = vocc::bake::umbra::grow_cell(&cell, &set, &Default::default());
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            let svg = vocc::bake::svg::render(&cell, &set, &out, 0.1 * cell_size);
+            write_atomically(&output, |w| w.write_all(svg.as_bytes()))?;
+            eprintln!(
+                "cell at ({:.1}, {:.1}) world, slice z = {:.1} m: {} blockers in the slice, {} seeds, {} dense VOs, {} rejected by the verifier, {ms:.1} ms; wrote {}",
+                cell[0].x + s.origin.x,
+                cell[0].y + s.origin.y,
+                z + s.origin.z,
+                set.len(),
+                out.traces.len(),
+                out.vos.len(),
+                out.rejected,
+                output.display()
+            );
             Ok(())
         }
         Command::GenCity {
