@@ -210,7 +210,7 @@ proptest! {
             let strictly_in = in_ext == Containment::Inside
                 && in_hole.iter().all(|&c| c == Containment::Outside);
             let strictly_out = in_ext == Containment::Outside
-                || in_hole.iter().any(|&c| c == Containment::Inside);
+                || in_hole.contains(&Containment::Inside);
             let hits: Vec<Containment> = pieces.iter().map(|q| point_in_convex(q, p)).collect();
             if strictly_in {
                 prop_assert!(hits.iter().any(|&c| c != Containment::Outside));

@@ -71,7 +71,7 @@ fn gap_through_which_one_line_escapes_does_not_fuse() {
 #[test]
 fn points_inside_the_cell_or_in_front_are_never_hidden() {
     let cell = rect(0.0, 0.0, 10.0, 10.0);
-    let blockers = vec![rect(-10.0, 20.0, 20.0, 22.0)];
+    let blockers = [rect(-10.0, 20.0, 20.0, 22.0)];
     let ver = Verifier::new(&cell, blockers.iter().map(|b| b.as_slice()));
     assert!(ver.hidden_parts(v(2.0, 5.0), v(8.0, 5.0)).is_empty());
     assert!(ver.hidden_parts(v(2.0, 15.0), v(8.0, 15.0)).is_empty());

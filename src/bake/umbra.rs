@@ -17,6 +17,7 @@
 //! 1. `B` meets `P` only: it reaches into the umbra; it joins when the chain's umbra grows.
 //! 2. `B` meets `Q` only: it bends the separating polyline (Fig. 3, object 3).
 //! 3. `B` meets both: it updates the umbra and both lines.
+//!
 //! In every case `B` joins when the chain's best VO grows; and it joins as a *bridge* when the
 //! chain stays valid and `B` reaches past `P`, even if the umbra does not grow yet, so that a
 //! later blocker (object 2 of Fig. 3) can join through it. Bridges in a row are limited.
@@ -33,6 +34,7 @@
 //!   closed: `r_k` lies in the next arc),
 //! - `orient(q, l_1, c) != Cw` and `orient(q, c, r_m) != Cw` for every cell vertex `c`
 //!   (between the supporting lines),
+//!
 //! is an intersection of half-planes through input vertices, hence convex, and every point of it
 //! is hidden: the chords' angular intervals overlap in a chain that covers the cell's angle, and
 //! each chord's blocker lies between `q` and the cell (the argument of the verifier's Lemma 1,

@@ -33,8 +33,9 @@ impl GridDescriptor {
     pub fn cell_at(&self, x: f64, y: f64) -> Option<CellId> {
         let fx = (x - self.min_x) / self.cell_size;
         let fy = (y - self.min_y) / self.cell_size;
-        // `!(a >= 0)` also rejects NaN.
-        if !(fx >= 0.0 && fy >= 0.0) || !(fx < self.nx as f64 && fy < self.ny as f64) {
+        // Written so that NaN fails every comparison and is rejected.
+        let inside = fx >= 0.0 && fy >= 0.0 && fx < self.nx as f64 && fy < self.ny as f64;
+        if !inside {
             return None;
         }
         let (i, j) = (fx as u32, fy as u32);
