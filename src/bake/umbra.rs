@@ -359,7 +359,7 @@ impl<'a> Grower<'a> {
             for off in [1.0, 0.25 * w, 0.5 * w, w, 2.0 * w] {
                 let o = mid + n * (depth + off);
                 let mut best: Option<Vo> = None;
-                for shift in [0.0, -0.25, 0.25, -0.5, 0.5] {
+                for shift in [0.0, -0.25, 0.25] {
                     let q = o + dir * (shift * w);
                     let Some(region) = self.region(chain, q) else {
                         continue;

@@ -51,8 +51,8 @@
 use glam::DVec2;
 
 use super::predicates::{
-    common_tangents, orient, point_in_convex, set_side, tangent_vertices, Containment, Orientation,
-    SetSide,
+    common_tangents, convex_interiors_disjoint, orient, point_in_convex, set_side,
+    tangent_vertices, Containment, Orientation, SetSide,
 };
 
 /// Pieces shorter than this are not split further; an uncertified one counts as visible, metres.
@@ -126,6 +126,17 @@ impl<'a> Verifier<'a> {
             .filter(|(_, (bl, bh))| bl.x <= hi.x && bh.x >= lo.x && bl.y <= hi.y && bh.y >= lo.y)
             .map(|(b, _)| *b)
             .collect();
+        // Every segment from the cell to [a, b] lies in their convex hull; a blocker whose
+        // interior misses the hull can at most touch such segments on its boundary. Leaving it
+        // out can only certify less, never more.
+        let hull = convex_hull(self.cell.iter().copied().chain([a, b]));
+        let near: Vec<&[DVec2]> = if hull.len() >= 3 {
+            near.into_iter()
+                .filter(|b| !convex_interiors_disjoint(&hull, b))
+                .collect()
+        } else {
+            near
+        };
         let mut out: Vec<Hidden> = Vec::new();
         let mut stack = vec![(0.0f64, 1.0f64, a, b, 0u32)];
         // Depth-first, left piece first, so pieces come out in order.
@@ -231,7 +242,12 @@ impl<'a> Verifier<'a> {
         // (each valid by (A)) make (O) hold trivially. Adjacent convex pieces of one footprint, and
         // buildings that share a wall, meet like this; across the line of a shared edge the
         // extreme vertices swap, and only such a join certifies both sides at once.
+        let boxes: Vec<(DVec2, DVec2)> = near.iter().map(|p| bbox(p)).collect();
         let shared = |a: &Link, b: &Link| -> Option<DVec2> {
+            let ((al, ah), (bl, bh)) = (boxes[a.poly], boxes[b.poly]);
+            if al.x > bh.x || bl.x > ah.x || al.y > bh.y || bl.y > ah.y {
+                return None;
+            }
             let (pa, pb) = (near[a.poly], near[b.poly]);
             pa.iter().copied().find(|v| {
                 pb.contains(v) && all(&|p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
@@ -362,6 +378,36 @@ pub fn exact_midpoint(p: DVec2, q: DVec2) -> Option<DVec2> {
     let m = DVec2::new(sx * 0.5, sy * 0.5);
     // Halving is exact unless it underflows.
     (m.x * 2.0 == sx && m.y * 2.0 == sy && m != p && m != q).then_some(m)
+}
+
+/// Convex hull, counter-clockwise, without collinear points (Andrew's monotone chain with exact
+/// orientation tests).
+fn convex_hull(pts: impl Iterator<Item = DVec2>) -> Vec<DVec2> {
+    let mut p: Vec<DVec2> = pts.collect();
+    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    p.dedup();
+    if p.len() < 3 {
+        return p;
+    }
+    let mut h: Vec<DVec2> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = h.len();
+        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for &q in iter {
+            while h.len() >= start + 2
+                && orient(h[h.len() - 2], h[h.len() - 1], q) != Orientation::Ccw
+            {
+                h.pop();
+            }
+            h.push(q);
+        }
+        h.pop();
+    }
+    h
 }
 
 fn bbox(p: &[DVec2]) -> (DVec2, DVec2) {
