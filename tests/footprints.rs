@@ -221,3 +221,55 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn heights_fall_back_to_levels_and_missing_ones_are_reported() {
+    use vocc::scene::{Location, ReadOptions, SkipReason};
+    let path = repo("tests/fixtures/scenes/heights_and_levels.geojson");
+    let opts = ReadOptions {
+        height_attr: Some("height".into()),
+        levels_attr: Some("levels".into()),
+        storey_height: 3.5,
+        ..ReadOptions::default()
+    };
+    let s = scene::load(&[path.clone()], &opts).unwrap();
+    let tops: Vec<(String, f64)> = s
+        .objects
+        .iter()
+        .map(|o| (o.name.clone(), o.bbox.max.z - o.bbox.min.z))
+        .collect();
+    assert_eq!(
+        tops,
+        vec![
+            ("h".to_string(), 12.5),
+            ("levels-only".to_string(), 14.0),
+            ("string-height".to_string(), 7.5)
+        ]
+    );
+    let skipped: Vec<(Location, SkipReason)> = s
+        .report
+        .skipped
+        .iter()
+        .map(|(_, k)| (k.location.clone(), k.reason.clone()))
+        .collect();
+    assert_eq!(
+        skipped,
+        vec![
+            (Location::Feature(3), SkipReason::NoHeight),
+            (Location::Feature(4), SkipReason::NotAreal("Point".into())),
+            (Location::Feature(5), SkipReason::EmptyGeometry),
+        ]
+    );
+    // Without the levels fallback, the storey-only feature is skipped too.
+    let opts = ReadOptions {
+        height_attr: Some("height".into()),
+        ..ReadOptions::default()
+    };
+    let s = scene::load(&[path], &opts).unwrap();
+    assert_eq!(s.objects.len(), 2);
+    assert!(s
+        .report
+        .skipped
+        .iter()
+        .any(|(_, k)| k.location == Location::Feature(1) && k.reason == SkipReason::NoHeight));
+}
