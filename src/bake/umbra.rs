@@ -356,7 +356,7 @@ impl<'a> Grower<'a> {
                 .flat_map(|&id| self.poly(id).iter())
                 .map(|&v| (v - mid).dot(n))
                 .fold(0.0f64, f64::max);
-            for off in [1.0, 0.25 * w, 0.5 * w, w, 2.0 * w] {
+            for off in [1.0, 0.5 * w, 2.0 * w] {
                 let o = mid + n * (depth + off);
                 let mut best: Option<Vo> = None;
                 for shift in [0.0, -0.25, 0.25] {
