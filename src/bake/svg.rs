@@ -111,7 +111,11 @@ pub fn render(cell: &[DVec2], set: &BlockerSet, vos: &CellVos, margin: f64) -> S
     }
     let _ = writeln!(
         s,
-        r##"<text x="8" y="16">cell, seeds (blue), supporting lines (purple, dashed), separating lines (red), {} dense VOs (black), verifier rejections: {}</text>"##,
+        r##"<text x="8" y="16">cell (yellow), seeds (blue), supporting lines (purple, dashed), separating lines (red)</text>"##
+    );
+    let _ = writeln!(
+        s,
+        r##"<text x="8" y="32">{} dense VOs (black), verifier rejections: {}</text>"##,
         vos.vos.len(),
         vos.rejected
     );
