@@ -212,6 +212,16 @@ fn blockers_touching_at_one_vertex_fuse() {
     assert!(longest(&out) > best_single(&cell(), &blockers) + 5.0);
 }
 
+/// Overlapping blockers (as overlapping footprints of neighbouring buildings are) have no
+/// crossing tangents; they join through a vertex of one that lies in the other.
+#[test]
+fn overlapping_blockers_fuse() {
+    let blockers = vec![rect(-10.0, 20.0, 6.0, 24.0), rect(4.0, 22.0, 20.0, 27.0)];
+    let out = run_all("overlapping", &cell(), &blockers);
+    assert!(out.vos.iter().any(|v| v.chain.len() == 2));
+    assert!(longest(&out) > best_single(&cell(), &blockers) + 5.0);
+}
+
 #[test]
 fn blocker_touching_the_cell() {
     let blockers = vec![rect(10.0, 2.0, 40.0, 8.0), rect(-5.0, 20.0, 25.0, 23.0)];

@@ -26,7 +26,8 @@
 //! ## Why every VO is hidden (the chain certificate)
 //! For a chain with fixed vertex choices — `l_1` where the left outer tangent touches `B_1`,
 //! `r_m` where the right one touches `B_m`, and for each join the two contacts `r_k`, `l_{k+1}`
-//! of a crossing tangent of `B_k` and `B_{k+1}`, or a vertex they share — plus a separating line
+//! of a crossing tangent of `B_k` and `B_{k+1}`, or a point of both (a shared vertex, or a vertex
+//! of one inside the other) — plus a separating line
 //! `L_k` between each `B_k` and the cell, the set of points `q` with
 //! - `q` strictly on `B_k`'s side of `L_k`,
 //! - `orient(q, l_k, r_k) = Ccw` (behind each chord),
@@ -51,8 +52,8 @@ use glam::DVec2;
 
 use super::{bounds, seed, BlockerSet};
 use crate::geom::predicates::{
-    common_tangents, convex_interiors_disjoint, orient, segment_meets_convex, set_side,
-    CommonTangents, Orientation, SetSide,
+    common_tangents, convex_interiors_disjoint, orient, point_in_convex, segment_meets_convex,
+    set_side, CommonTangents, Containment, Orientation, SetSide,
 };
 use crate::geom::verify::Verifier;
 
@@ -185,6 +186,7 @@ struct Grower<'a> {
     usable: HashSet<u32>,
     cell_tangents: HashMap<u32, CommonTangents>,
     pair_tangents: HashMap<(u32, u32), CommonTangents>,
+    common: HashMap<(u32, u32), Vec<DVec2>>,
 }
 
 impl<'a> Grower<'a> {
@@ -208,6 +210,28 @@ impl<'a> Grower<'a> {
             .or_insert_with(|| common_tangents(p, q))
     }
 
+    /// Vertices of either blocker that lie in both (closed), cached per pair.
+    fn common_points(&mut self, a: u32, b: u32) -> Vec<DVec2> {
+        let (p, q) = (self.poly(a), self.poly(b));
+        self.common
+            .entry((a, b))
+            .or_insert_with(|| {
+                let ((pl, ph), (ql, qh)) = (bounds(p), bounds(q));
+                if pl.x > qh.x || ql.x > ph.x || pl.y > qh.y || ql.y > ph.y {
+                    return Vec::new();
+                }
+                p.iter()
+                    .chain(q.iter())
+                    .copied()
+                    .filter(|&v| {
+                        point_in_convex(p, v) != Containment::Outside
+                            && point_in_convex(q, v) != Containment::Outside
+                    })
+                    .collect()
+            })
+            .clone()
+    }
+
     /// The chain's certified region as seen from the reference point `q` (module header).
     fn region(&mut self, chain: &[u32], q: DVec2) -> Option<Region> {
         use Orientation::*;
@@ -222,12 +246,14 @@ impl<'a> Grower<'a> {
         for k in 0..m - 1 {
             let t = self.pair_t(chain[k], chain[k + 1]);
             let (pk, pn) = (self.poly(chain[k]), self.poly(chain[k + 1]));
-            // Blockers that share a vertex `v` look joined through it from everywhere: with
-            // contacts `r_k = l_{k+1} = v` the join condition holds trivially, so it is the
-            // best join when the chords stay valid.
-            let mut best: Option<(f64, DVec2, DVec2)> = pk
+            // Blockers that share a point `v` — a common vertex, or a vertex of one lying in the
+            // other (overlapping blockers) — look joined through it from everywhere: with
+            // contacts `r_k = l_{k+1} = v` the join condition holds trivially, and both chords
+            // still lie in their blockers (convexity). It is the best join when the chords stay
+            // valid.
+            let common = self.common_points(chain[k], chain[k + 1]);
+            let mut best: Option<(f64, DVec2, DVec2)> = common
                 .iter()
-                .filter(|v| pn.contains(v))
                 .find(|&&v| orient(q, ls[k], v) == Ccw)
                 .map(|&v| (f64::INFINITY, v, v));
             for c in [t.cross_left, t.cross_right].into_iter().flatten() {
@@ -647,6 +673,7 @@ fn grower<'a>(
         usable: near.iter().copied().collect(),
         cell_tangents: HashMap::new(),
         pair_tangents: HashMap::new(),
+        common: HashMap::new(),
     }
 }
 

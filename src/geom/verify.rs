@@ -11,7 +11,8 @@
 //!
 //! ## The certificate
 //! For a point `q`, a *certificate* is a chain of blockers `B_1..B_m`, each with a chord
-//! `[l_k, r_k]` between two of its vertices and a separating line `L_k` between `B_k` and `C`
+//! `[l_k, r_k]` between two of its points (vertices, or a vertex of a neighbour lying in it) and
+//! a separating line `L_k` between `B_k` and `C`
 //! through two input vertices. It holds at `q` when (every test an exact orientation of `q`
 //! against two input vertices):
 //! - (S) `q` lies strictly on `B_k`'s side of `L_k`, for every k;
@@ -238,8 +239,9 @@ impl<'a> Verifier<'a> {
         let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, c, k.r) != Cw));
         let overlaps =
             |a: &Link, b: &Link| all(&|p| orient(p, b.l, a.r) != Cw && orient(p, a.r, b.r) != Cw);
-        // Blockers that share a vertex `v` join through it: the chords `[a.l, v]` and `[v, b.r]`
-        // (each valid by (A)) make (O) hold trivially. Adjacent convex pieces of one footprint, and
+        // Blockers that share a point `v` (a common vertex, or a vertex of one inside the
+        // other) join through it: the chords `[a.l, v]` and `[v, b.r]` lie in their blockers
+        // (convexity), are valid by (A), and make (O) hold trivially. Adjacent convex pieces of one footprint, and
         // buildings that share a wall, meet like this; across the line of a shared edge the
         // extreme vertices swap, and only such a join certifies both sides at once.
         let boxes: Vec<(DVec2, DVec2)> = near.iter().map(|p| bbox(p)).collect();
@@ -249,8 +251,12 @@ impl<'a> Verifier<'a> {
                 return None;
             }
             let (pa, pb) = (near[a.poly], near[b.poly]);
-            pa.iter().copied().find(|v| {
-                pb.contains(v) && all(&|p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
+            let in_both = |v: &DVec2| {
+                point_in_convex(pa, *v) != Containment::Outside
+                    && point_in_convex(pb, *v) != Containment::Outside
+            };
+            pa.iter().chain(pb.iter()).copied().find(|v| {
+                in_both(v) && all(&|p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
             })
         };
         let joins = |a: &Link, b: &Link| overlaps(a, b) || shared(a, b).is_some();
