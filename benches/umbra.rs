@@ -72,7 +72,7 @@ fn main() {
                 times.push(t.elapsed().as_secs_f64() * 1e3);
                 counts.push(out.vos.len() as f64);
                 lens.extend(out.vos.iter().map(|v| v.length()));
-                rejected += out.rejected;
+                rejected += out.rejected();
             }
         }
         let n = counts.len();

@@ -42,7 +42,8 @@ fn run_checked(
     let set = BlockerSet::new(blockers.clone(), vec![20.0; blockers.len()]);
     let out = grow_cell(&cell, &set, &GrowParams::default());
     assert_eq!(
-        out.rejected, 0,
+        out.rejected(),
+        0,
         "{name} at {off}: the verifier had to cut VOs"
     );
     for vo in &out.vos {
@@ -315,7 +316,7 @@ mod random {
         #[test]
         fn every_vo_of_random_scenes_is_verified(blockers in scene()) {
             let out = run_checked("random", &cell(), &blockers, 0.0, 2);
-            prop_assert_eq!(out.rejected, 0);
+            prop_assert_eq!(out.rejected(), 0);
         }
     }
 }

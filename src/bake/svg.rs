@@ -117,7 +117,7 @@ pub fn render(cell: &[DVec2], set: &BlockerSet, vos: &CellVos, margin: f64) -> S
         s,
         r##"<text x="8" y="32">{} dense VOs (black), verifier rejections: {}</text>"##,
         vos.vos.len(),
-        vos.rejected
+        vos.rejected()
     );
     s.push_str("</svg>\n");
     s

@@ -123,6 +123,13 @@ pub enum Case {
     Both,
 }
 
+impl CellVos {
+    /// How many VOs the verifier had to cut or drop (tests require 0).
+    pub fn rejected(&self) -> usize {
+        self.rejected_vos.len()
+    }
+}
+
 /// One accepted chain state, for pictures.
 #[derive(Clone, Debug)]
 pub struct Step {
@@ -148,8 +155,7 @@ pub struct SeedTrace {
 pub struct CellVos {
     /// The dense set, every VO verified.
     pub vos: Vec<Vo>,
-    /// VOs the verifier had to cut or drop (must be 0), as the growth emitted them.
-    pub rejected: usize,
+    /// VOs the verifier had to cut or drop (must be none), as the growth emitted them.
     pub rejected_vos: Vec<Vo>,
     pub traces: Vec<SeedTrace>,
 }
@@ -730,7 +736,6 @@ pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellV
             out.vos.push(v);
             continue;
         }
-        out.rejected += 1;
         out.rejected_vos.push(v.clone());
         let parts = ver.hidden_parts(v.a, v.b);
         if let Some(h) = parts

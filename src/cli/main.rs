@@ -176,7 +176,7 @@ fn run(cli: Cli) -> Result<()> {
                 set.len(),
                 out.traces.len(),
                 out.vos.len(),
-                out.rejected,
+                out.rejected(),
                 output.display()
             );
             Ok(())

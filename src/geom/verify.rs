@@ -326,31 +326,24 @@ impl<'a> Verifier<'a> {
 /// blocker's edges and the two crossing common tangents.
 fn separating_line(b: &[DVec2], cell: &[DVec2], qs: &[DVec2]) -> Option<SepLine> {
     let ok = |s: SepLine| qs.iter().all(|&q| s.holds(q));
-    for i in 0..cell.len() {
-        let (u, v) = (cell[i], cell[(i + 1) % cell.len()]);
-        if set_side(u, v, b) == SetSide::Right {
-            let s = SepLine {
-                a: u,
-                b: v,
-                side: Orientation::Cw,
-            };
-            if ok(s) {
-                return Some(s);
-            }
-        }
+    // An edge of one polygon (counter-clockwise, so itself on the left) with the other wholly
+    // on the right: the blocker's side is right of a cell edge, left of a blocker edge.
+    fn edges<'a>(
+        poly: &'a [DVec2],
+        other: &'a [DVec2],
+        side: Orientation,
+    ) -> impl Iterator<Item = SepLine> + 'a {
+        let n = poly.len();
+        (0..n).filter_map(move |i| {
+            let (u, v) = (poly[i], poly[(i + 1) % n]);
+            (set_side(u, v, other) == SetSide::Right).then_some(SepLine { a: u, b: v, side })
+        })
     }
-    for i in 0..b.len() {
-        let (u, v) = (b[i], b[(i + 1) % b.len()]);
-        if set_side(u, v, cell) == SetSide::Right {
-            let s = SepLine {
-                a: u,
-                b: v,
-                side: Orientation::Ccw,
-            };
-            if ok(s) {
-                return Some(s);
-            }
-        }
+    if let Some(s) = edges(cell, b, Orientation::Cw)
+        .chain(edges(b, cell, Orientation::Ccw))
+        .find(|&s| ok(s))
+    {
+        return Some(s);
     }
     let t = common_tangents(cell, b);
     // cross_left: cell on the left, blocker on the right; cross_right: the reverse.
