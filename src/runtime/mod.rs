@@ -1,9 +1,15 @@
 //! Runtime core: what an engine embeds. Builds with `--no-default-features`.
 //!
-//! Input: a grid descriptor and positions in the store's local frame. Output: cell ids.
+//! Input: a store or a per-cell blob, positions and the engine's object boxes, in the store's
+//! local frame. Output: cell ids, a cell's virtual occluders, and the cell's PVS.
 //! Invariants: no dependency on the geometry stack; no panics on any input (NaN and out-of-grid
-//! positions give `None`).
+//! positions give `None`, malformed bytes give an error); every culling decision is conservative
+//! (rule 3, [`occlusion`]).
 
+pub mod frame;
 pub mod grid;
+pub mod occlusion;
 
+pub use frame::{CellView, Frame, QVo, VoGeom, MAX_VOS_PER_CELL};
 pub use grid::{CellId, GridDescriptor};
+pub use occlusion::{Cover, PreparedVo};
