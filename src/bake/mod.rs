@@ -1,11 +1,17 @@
 //! The bake: from blockers to per-cell virtual occluders. One file per pipeline stage.
 //!
-//! Stages so far: [`seed`] (which blockers start a cluster) and [`umbra`] (aggregate umbrae grown
-//! from a seed, and the dense set of 2D virtual occluders behind them). [`svg`] draws one cell.
-//! Every VO any stage emits passes the exact verifier ([`crate::geom::verify`]) before it
-//! leaves the stage; a VO it had to cut or drop is counted, and tests require that count be 0.
+//! Stages, in pipeline order: [`slice`] (slice heights and rule 2), [`seed`] (which blockers
+//! start a cluster), [`umbra`] (aggregate umbrae grown from a seed, and the dense set of 2D
+//! virtual occluders behind them), [`decimate`] (the few most effective), [`quantize`] (5 bytes,
+//! conservatively). [`pipeline`] orchestrates them per cell and over cells; [`svg`] draws one
+//! cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
+//! dequantized form; a VO that fails is shrunk or dropped and counted.
 
+pub mod decimate;
+pub mod pipeline;
+pub mod quantize;
 pub mod seed;
+pub mod slice;
 pub mod svg;
 pub mod umbra;
 

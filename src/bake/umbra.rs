@@ -80,6 +80,10 @@ pub struct GrowParams {
     pub tries: usize,
     /// Shortest VO kept, metres.
     pub min_vo_m: f64,
+    /// Pass every dense VO through the exact verifier before returning it (the gate). The bake
+    /// turns it off: it verifies the few VOs it keeps after quantization instead, from their
+    /// stored bytes, with rule 2's blockers.
+    pub verify: bool,
 }
 
 impl Default for GrowParams {
@@ -91,6 +95,7 @@ impl Default for GrowParams {
             max_bridges: 2,
             tries: 12,
             min_vo_m: 1.0,
+            verify: true,
         }
     }
 }
@@ -193,6 +198,8 @@ struct Grower<'a> {
     cell_tangents: HashMap<u32, CommonTangents>,
     pair_tangents: HashMap<(u32, u32), CommonTangents>,
     common: HashMap<(u32, u32), Vec<DVec2>>,
+    /// Blockers met by a ray, before the `usable` filter, keyed by the ray's end points' bits.
+    rays: HashMap<[u64; 4], Vec<u32>>,
 }
 
 impl<'a> Grower<'a> {
@@ -431,7 +438,21 @@ impl<'a> Grower<'a> {
     }
 
     /// Blockers met by the ray from `a` through `b`, up to the search distance from the cell.
-    fn along(&self, a: DVec2, b: DVec2) -> Vec<u32> {
+    fn along(&mut self, a: DVec2, b: DVec2) -> Vec<u32> {
+        let key = [a.x.to_bits(), a.y.to_bits(), b.x.to_bits(), b.y.to_bits()];
+        if !self.rays.contains_key(&key) {
+            let met = self.along_all(a, b);
+            self.rays.insert(key, met);
+        }
+        self.rays[&key]
+            .iter()
+            .copied()
+            .filter(|id| self.usable.contains(id))
+            .collect()
+    }
+
+    /// [`Self::along`] over every blocker of the set, usable or not (cached across slices).
+    fn along_all(&self, a: DVec2, b: DVec2) -> Vec<u32> {
         let d = (b - a).normalize_or_zero();
         if d == DVec2::ZERO {
             return Vec::new();
@@ -443,10 +464,7 @@ impl<'a> Grower<'a> {
             let p = a + d * (s as f64 * QUERY_STEP_M);
             let q = a + d * (((s + 1) as f64 * QUERY_STEP_M).min(self.params.search_m));
             for id in self.set.in_box(p.min(q), p.max(q)) {
-                if self.usable.contains(&id)
-                    && !out.contains(&id)
-                    && segment_meets_convex(a, end, self.poly(id))
-                {
+                if !out.contains(&id) && segment_meets_convex(a, end, self.poly(id)) {
                     out.push(id);
                 }
             }
@@ -654,7 +672,7 @@ fn clip_snap(planes: &[HalfPlane], o: DVec2, dir: DVec2) -> Option<(DVec2, DVec2
 }
 
 /// The blockers the growth of a cell may use: within the search distance, not overlapping it.
-fn usable(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> Vec<u32> {
+pub fn usable(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> Vec<u32> {
     let (lo, hi) = bounds(cell);
     let r = DVec2::splat(params.search_m);
     let mut near: Vec<u32> = set
@@ -680,6 +698,7 @@ fn grower<'a>(
         cell_tangents: HashMap::new(),
         pair_tangents: HashMap::new(),
         common: HashMap::new(),
+        rays: HashMap::new(),
     }
 }
 
@@ -696,9 +715,45 @@ pub fn grow_seed(
 
 /// Grows the dense VO set of one cell and passes it through the exact verifier.
 pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellVos {
-    let near_sorted = usable(cell, set, params);
-    let mut g = grower(cell, set, params, &near_sorted);
-    let seeds = seed::seeds(cell, set, &near_sorted, params.seeds);
+    grow_cell_among(cell, set, params, &usable(cell, set, params))
+}
+
+/// [`grow_cell`] over the given blockers only (sorted ids, none overlapping the cell): the
+/// blockers that support a slice.
+pub fn grow_cell_among(
+    cell: &[DVec2],
+    set: &BlockerSet,
+    params: &GrowParams,
+    near_sorted: &[u32],
+) -> CellVos {
+    CellGrower::new(cell, set, params).grow(near_sorted)
+}
+
+/// The growth of one cell over several blocker subsets (the slices), sharing the tangents and
+/// ray queries between them: a tangent of two blockers does not depend on the slice.
+pub struct CellGrower<'a>(Grower<'a>);
+
+impl<'a> CellGrower<'a> {
+    pub fn new(cell: &'a [DVec2], set: &'a BlockerSet, params: &'a GrowParams) -> Self {
+        CellGrower(grower(cell, set, params, &[]))
+    }
+
+    /// The dense set over blockers `near_sorted` (sorted ids, none overlapping the cell).
+    pub fn grow(&mut self, near_sorted: &[u32]) -> CellVos {
+        self.0.usable = near_sorted.iter().copied().collect();
+        let (cell, set, params) = (self.0.cell, self.0.set, self.0.params);
+        grow_usable(&mut self.0, cell, set, params, near_sorted)
+    }
+}
+
+fn grow_usable(
+    g: &mut Grower,
+    cell: &[DVec2],
+    set: &BlockerSet,
+    params: &GrowParams,
+    near_sorted: &[u32],
+) -> CellVos {
+    let seeds = seed::seeds(cell, set, near_sorted, params.seeds);
     let mut out = CellVos::default();
     let mut dense: Vec<Vo> = Vec::new();
     let mut grown: HashSet<u32> = HashSet::new();
@@ -724,6 +779,10 @@ pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellV
             v.b.y.to_bits(),
         ))
     });
+    if !params.verify {
+        out.vos = dense;
+        return out;
+    }
     // The gate: the exact verifier, which shares nothing with the growth but the predicates.
     let ver = Verifier::new(
         cell,

@@ -23,9 +23,11 @@
 //!
 //! ## Heights
 //! The box is hidden when its footprint lies in the umbra, `zmin >= g`, `e0 >= g`, and
-//! `zmax <= e1 + (h - e1) * D_near / D_far`, with `D_near` the least distance between the cell
-//! and the footprint and `D_far` the greatest distance between the cell and the VO. Proof in
-//! ARCHITECTURE.md ("Rule 3").
+//! `zmax <= e1 + (h - e1) * max(1, D_near / D_far)`, with `D_near` the least distance between the
+//! cell and the footprint and `D_far` the greatest distance between the cell and the VO. The
+//! brief's rule 3 has the ratio alone; the ray from an eye to the box crosses the VO's line
+//! before it reaches the box, so the ratio can also be taken as at least 1. Proof in
+//! ARCHITECTURE.md ("Rules 2 and 3").
 
 use crate::runtime::frame::{CellView, VoGeom};
 
@@ -153,7 +155,7 @@ impl PreparedVo {
         if d_near <= 0.0 {
             return Cover::Partial;
         }
-        let top = view.e1 + (self.h - view.e1) * d_near / self.d_far;
+        let top = view.e1 + (self.h - view.e1) * (d_near / self.d_far).max(1.0);
         // `zmin >= g` compares stored values, with no arithmetic: exact.
         let ok = bx[2] >= self.g && view.e0 >= self.g && bx[5] + m <= top && self.h >= view.e1;
         if ok {
@@ -205,16 +207,21 @@ mod tests {
 
     #[test]
     fn the_top_bound_follows_rule_3() {
-        // D_near = 15, D_far = dist((10,0), (-20,20)) + margin = sqrt(1300).
+        // D_near = 15 < D_far = dist((10,0), (-20,20)) = sqrt(1300): the ratio is capped at 1,
+        // so the top bound is the VO's own top.
         let v = view();
         let w = wall(10.0);
-        let top = 2.0 + 8.0 * 15.0 / 1300f64.sqrt();
+        let top = 10.0;
         let under = [3.0, 25.0, 0.0, 7.0, 28.0, top - 0.01];
         let over = [3.0, 25.0, 0.0, 7.0, 28.0, top + 0.01];
         assert!(hides(&v, &w, &under));
         assert!(!hides(&v, &w, &over));
         // Below the VO's bottom: visible under it.
         assert!(!hides(&v, &w, &[3.0, 25.0, -1.0, 7.0, 28.0, 1.0]));
+        // Far behind (D_near = 90 > D_far), a box may rise above the VO's top.
+        let top = 2.0 + 8.0 * (90.0 - 0.002) / (1300f64.sqrt() + 0.002);
+        assert!(hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top - 0.01]));
+        assert!(!hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top + 0.01]));
     }
 
     #[test]

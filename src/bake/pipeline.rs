@@ -1,0 +1,516 @@
+//! The orchestrator: a scene and bake parameters in, one stored record per cell out.
+//!
+//! Input: a loaded [`Scene`] and [`BakeParams`]. Output: the store's [`Frame`] and, per cell in
+//! id order, a [`CellBake`]: its record (skipped, or its ground level and at most `max_vos`
+//! quantized VOs, most effective first) and what it took.
+//! Per cell: ground and eyes, then the slices ([`super::slice`]), the dense set per slice
+//! ([`super::umbra`]), the decimation ([`super::decimate`]) whose accept step quantizes
+//! ([`super::quantize`]) and then re-checks the *dequantized* VO with rule 2 and the exact
+//! verifier. A VO that fails is shrunk or dropped and counted.
+//! Invariants: each cell is baked from the scene alone (no state shared between cells), so the
+//! output is the same for any thread count and any order of cells; no cell gets more than
+//! [`MAX_VOS_PER_CELL`] VOs.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::decimate::{greedy, Occludees};
+use super::quantize::{clip, quantize, window, Refused};
+use super::seed::area_angle;
+use super::slice::{choose_levels, d_near, Support};
+use super::umbra::{self, CellGrower, GrowParams};
+use super::BlockerSet;
+use crate::geom::predicates::{point_in_convex, Containment};
+use crate::geom::verify::Verifier;
+use crate::runtime::frame::{Frame, QVo, HEIGHT_LEVELS, MAX_VOS_PER_CELL, QUANT_STEPS};
+use crate::runtime::grid::{CellId, GridDescriptor};
+use crate::scene::Scene;
+
+/// Step between ground levels when the ground is not flat, metres (at least).
+pub const GROUND_STEP_M: f64 = 0.25;
+/// Blockers within this distance of a cell decide its ground, metres.
+pub const GROUND_RADIUS_M: f64 = 50.0;
+/// VO top of level k above the eyes: `H0_M * (H_RATIO^k - 1)`.
+pub const H0_M: f64 = 2.0;
+pub const H_RATIO: f64 = 1.25;
+/// Height levels tried for one VO before it is dropped: its own, then each lower one.
+pub const LEVEL_FALLBACKS: usize = 3;
+
+/// How many slices a cell gets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slices {
+    /// Up to 5, fewer when the heights around the cell do not spread over 5 levels.
+    Auto,
+    Fixed(u8),
+}
+
+/// What the bake is asked for.
+#[derive(Clone, Debug)]
+pub struct BakeParams {
+    /// Side of a view cell, metres.
+    pub cell_size: f64,
+    /// Eye heights above the ground, metres.
+    pub eye: (f64, f64),
+    pub slices: Slices,
+    pub max_vos: usize,
+    /// Bake only the cells meeting this local rectangle `[x0, y0, x1, y1]` (the grid still covers
+    /// the whole scene).
+    pub region: Option<[f64; 4]>,
+    pub grow: GrowParams,
+}
+
+impl Default for BakeParams {
+    fn default() -> Self {
+        BakeParams {
+            cell_size: 100.0,
+            eye: (1.5, 2.0),
+            slices: Slices::Auto,
+            max_vos: MAX_VOS_PER_CELL,
+            region: None,
+            grow: GrowParams {
+                verify: false,
+                ..GrowParams::default()
+            },
+        }
+    }
+}
+
+/// Why a bake cannot start.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum BakeError {
+    #[error("cell size must be a positive number of metres, got {0}")]
+    CellSize(f64),
+    #[error("eye heights must satisfy 0 <= low <= high, got {0}..{1}")]
+    Eye(f64, f64),
+    #[error("--max-vos must be 1..=10, got {0}")]
+    MaxVos(usize),
+    #[error("--slices must be 1..=5, got {0}")]
+    Slices(u8),
+    #[error("the scene has no objects")]
+    EmptyScene,
+    #[error("the grid would have {0} cells, more than 2^31; use larger cells")]
+    TooManyCells(u64),
+}
+
+/// One cell's stored record.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Record {
+    /// The cell lies inside a building: no eye can be there.
+    Skipped,
+    Vos {
+        ground: u8,
+        vos: Vec<QVo>,
+    },
+}
+
+/// What baking one cell took.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CellStats {
+    /// Slice levels used.
+    pub levels: Vec<u8>,
+    /// Dense VOs over all slices.
+    pub dense: usize,
+    /// VOs the decimation tried to store.
+    pub tried: usize,
+    /// Of those, stored only after a shorter grid segment or a lower level replaced a failed
+    /// one.
+    pub shrunk: usize,
+    /// Of those, dropped: no grid segment near them passed rule 2 and the verifier.
+    pub dropped: usize,
+    /// Occludee cost hidden by the stored VOs (rule 3, within the weighting radius).
+    pub hidden_cost: u64,
+    pub ms: f64,
+}
+
+/// One baked cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellBake {
+    pub id: CellId,
+    pub record: Record,
+    pub stats: CellStats,
+}
+
+/// Everything shared by the cells of one bake.
+pub struct Plan<'s> {
+    pub scene: &'s Scene,
+    pub params: BakeParams,
+    pub frame: Frame,
+    set: BlockerSet,
+    base: Vec<f64>,
+    top: Vec<f64>,
+    pub occludees: Occludees,
+}
+
+fn pow2_at_least(x: f64) -> f64 {
+    let mut q = 1.0f64 / 1024.0;
+    while q < x {
+        q *= 2.0;
+    }
+    q
+}
+
+impl<'s> Plan<'s> {
+    pub fn new(scene: &'s Scene, params: BakeParams) -> Result<Plan<'s>, BakeError> {
+        let size = params.cell_size;
+        if !(size.is_finite() && size > 0.0 && size <= 1e5) {
+            return Err(BakeError::CellSize(size));
+        }
+        let (e0, e1) = params.eye;
+        if !(e0.is_finite() && e1.is_finite() && 0.0 <= e0 && e0 <= e1) {
+            return Err(BakeError::Eye(e0, e1));
+        }
+        if params.max_vos == 0 || params.max_vos > MAX_VOS_PER_CELL {
+            return Err(BakeError::MaxVos(params.max_vos));
+        }
+        if let Slices::Fixed(n) = params.slices {
+            if n == 0 || n > 5 {
+                return Err(BakeError::Slices(n));
+            }
+        }
+        let ext = scene.extent();
+        if ext.is_empty() {
+            return Err(BakeError::EmptyScene);
+        }
+        // Grid corners on whole metres, so cell centres and the quantization grid are dyadic.
+        let (min_x, min_y) = (ext.min.x.floor(), ext.min.y.floor());
+        let nx = ((ext.max.x - min_x) / size).floor() as u64 + 1;
+        let ny = ((ext.max.y - min_y) / size).floor() as u64 + 1;
+        if nx * ny > 1 << 31 {
+            return Err(BakeError::TooManyCells(nx * ny));
+        }
+        let base: Vec<f64> = scene.blockers.iter().map(|b| b.base).collect();
+        let top: Vec<f64> = scene.blockers.iter().map(|b| b.top).collect();
+        let (bmin, bmax) = base
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &b| {
+                (l.min(b), h.max(b))
+            });
+        let (ground_z0, ground_step) = if base.is_empty() {
+            (ext.min.z, 0.0)
+        } else if bmin == bmax {
+            (bmin, 0.0)
+        } else {
+            (
+                bmin,
+                pow2_at_least(((bmax - bmin) / 255.0).max(GROUND_STEP_M)),
+            )
+        };
+        let quantum = pow2_at_least((0.5 * size + params.grow.search_m) / (QUANT_STEPS / 2) as f64);
+        let frame = Frame {
+            origin: scene.origin.to_array(),
+            grid: GridDescriptor {
+                min_x,
+                min_y,
+                cell_size: size,
+                nx: nx as u32,
+                ny: ny as u32,
+            },
+            quantum,
+            eye_lo: e0,
+            eye_hi: e1,
+            ground_z0,
+            ground_step,
+            h0: H0_M,
+            h_ratio: H_RATIO,
+        };
+        let set = BlockerSet::new(
+            scene.blockers.iter().map(|b| b.polygon.clone()).collect(),
+            scene.blockers.iter().map(|b| b.top - b.base).collect(),
+        );
+        Ok(Plan {
+            scene,
+            frame,
+            set,
+            base,
+            top,
+            occludees: Occludees::from_scene(scene),
+            params,
+        })
+    }
+
+    /// The cells to bake, ascending.
+    pub fn cells(&self) -> Vec<CellId> {
+        let g = &self.frame.grid;
+        (0..g.cell_count() as u32)
+            .filter(|&id| match (self.params.region, g.cell_rect(id)) {
+                (Some(r), Some(c)) => c[0] <= r[2] && c[2] >= r[0] && c[1] <= r[3] && c[3] >= r[1],
+                _ => true,
+            })
+            .collect()
+    }
+
+    /// The cell's polygon, counter-clockwise.
+    pub fn cell_polygon(&self, id: CellId) -> [DVec2; 4] {
+        let [x0, y0, x1, y1] = self.frame.grid.cell_rect(id).unwrap_or([0.0; 4]);
+        [
+            DVec2::new(x0, y0),
+            DVec2::new(x1, y0),
+            DVec2::new(x1, y1),
+            DVec2::new(x0, y1),
+        ]
+    }
+
+    /// The ground level of a cell: the median base of the blockers within
+    /// [`GROUND_RADIUS_M`], rounded to the nearest level; level 0 on flat ground.
+    pub fn ground_level(&self, id: CellId) -> u8 {
+        let f = &self.frame;
+        if !f.per_cell_ground() {
+            return 0;
+        }
+        let cell = self.cell_polygon(id);
+        let r = DVec2::splat(GROUND_RADIUS_M);
+        let mut bases: Vec<f64> = self
+            .set
+            .in_box(cell[0] - r, cell[2] + r)
+            .map(|i| self.base[i as usize])
+            .collect();
+        if bases.is_empty() {
+            return 0;
+        }
+        bases.sort_by(f64::total_cmp);
+        let m = bases[bases.len() / 2];
+        ((m - f.ground_z0) / f.ground_step)
+            .round()
+            .clamp(0.0, 255.0) as u8
+    }
+
+    /// Bakes one cell.
+    pub fn bake_cell(&self, id: CellId) -> CellBake {
+        let t0 = Instant::now();
+        let mut stats = CellStats::default();
+        let record = self.bake_record(id, &mut stats);
+        stats.ms = t0.elapsed().as_secs_f64() * 1e3;
+        CellBake { id, record, stats }
+    }
+
+    fn bake_record(&self, id: CellId, stats: &mut CellStats) -> Record {
+        let f = &self.frame;
+        let cell = self.cell_polygon(id);
+        let ground = self.ground_level(id);
+        let Some(view) = f.cell_view(id, ground) else {
+            return Record::Vos {
+                ground,
+                vos: vec![],
+            };
+        };
+        let (g, e0, e1) = (f.ground_z(ground), view.e0, view.e1);
+        // A cell wholly inside one blocker that stands above the eyes holds no eye.
+        let inside = self.set.in_box(cell[0], cell[2]).any(|i| {
+            let p = &self.set.polys[i as usize];
+            self.base[i as usize] <= e0
+                && self.top[i as usize] >= e1
+                && cell
+                    .iter()
+                    .all(|&c| point_in_convex(p, c) != Containment::Outside)
+        });
+        if inside {
+            return Record::Skipped;
+        }
+        // Blockers that may support a VO: near, apart from the cell, standing from the ground
+        // (rule 2: base <= min(e0, g)) to above the eyes.
+        let near: Vec<u32> = umbra::usable(&cell, &self.set, &self.params.grow)
+            .into_iter()
+            .filter(|&i| self.base[i as usize] <= g.min(e0) && self.top[i as usize] > e1)
+            .collect();
+        if near.is_empty() {
+            return Record::Vos {
+                ground,
+                vos: vec![],
+            };
+        }
+        let centre = (cell[0] + cell[2]) * 0.5;
+        let support: Vec<Support> = near
+            .iter()
+            .map(|&i| {
+                let i = i as usize;
+                Support::new(&cell, &self.set.polys[i], self.base[i], self.top[i])
+            })
+            .collect();
+        let adjusted: Vec<(f64, f64)> = near
+            .iter()
+            .zip(&support)
+            .map(|(&i, s)| {
+                let i = i as usize;
+                let w = area_angle(&self.set.polys[i], self.top[i] - self.base[i], centre);
+                (s.adjusted_height(e1), w)
+            })
+            .collect();
+        let levels: Vec<f64> = (0..HEIGHT_LEVELS).map(|k| f.vo_top(e1, k)).collect();
+        let n = match self.params.slices {
+            Slices::Auto => 5,
+            Slices::Fixed(n) => n as usize,
+        };
+        stats.levels = choose_levels(&levels, &adjusted, n);
+
+        // The dense set, per slice.
+        let radius = self.params.grow.search_m + self.frame.grid.cell_size;
+        let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
+        let mut hidden: Vec<Vec<u32>> = Vec::new();
+        let mut grower = CellGrower::new(&cell, &self.set, &self.params.grow);
+        for &k in &stats.levels {
+            let ids: Vec<u32> = near
+                .iter()
+                .zip(&adjusted)
+                .filter(|(_, (h, _))| *h >= levels[k as usize])
+                .map(|(&i, _)| i)
+                .collect();
+            let dense = grower.grow(&ids);
+            for mut v in dense.vos {
+                // Only the part inside the quantization window (less a grid step) can be stored.
+                let (lo, hi) = window(f, centre);
+                let step = DVec2::splat(f.quantum);
+                let Some((a, b)) = clip(v.a, v.b, lo + step, hi - step) else {
+                    continue;
+                };
+                if a.distance(b) < 2.0 * f.quantum {
+                    continue;
+                }
+                (v.a, v.b) = (a, b);
+                // The VO's own level: the highest at which every blocker of the chain that
+                // certified it supports it by rule 2 (at least the slice's, usually).
+                let dn = d_near(&cell, &[v.a, v.b]);
+                let chain: Vec<&Support> = v
+                    .chain
+                    .iter()
+                    .filter_map(|id| near.binary_search(id).ok().map(|p| &support[p]))
+                    .collect();
+                let Some(level) = (1..HEIGHT_LEVELS).rev().find(|&l| {
+                    chain
+                        .iter()
+                        .all(|s| s.supports(e0, e1, g, levels[l as usize], dn))
+                }) else {
+                    continue;
+                };
+                let geom = crate::runtime::frame::VoGeom {
+                    a: v.a.to_array(),
+                    b: v.b.to_array(),
+                    g,
+                    h: levels[level as usize],
+                };
+                let h = self.occludees.hidden(&view, &geom, radius);
+                if !h.is_empty() {
+                    cands.push((level, v.a, v.b));
+                    hidden.push(h);
+                }
+            }
+        }
+        stats.dense = cands.len();
+
+        // Decimation; each pick is quantized and re-checked from its dequantized form.
+        let mut tried = 0;
+        let mut shrunk = 0;
+        let mut dropped = 0;
+        let vos = greedy(&hidden, &self.occludees.cost, self.params.max_vos, |i| {
+            let (k, a, b) = cands[i];
+            tried += 1;
+            // At the slice's level first; when rule 2 leaves too few blockers for the verifier
+            // (a chain member nearer than the VO's own nearest point), at lower levels.
+            let mut first = true;
+            for level in (1..=k).rev().take(LEVEL_FALLBACKS) {
+                let mut checks = 0;
+                let r = quantize(f, id, ground, level, a, b, |qa, qb| {
+                    checks += 1;
+                    let h = f.vo_top(e1, level);
+                    self.rule2_and_verify(&cell, &near, &support, (e0, e1, g), h, qa, qb)
+                });
+                if let Ok(q) = r {
+                    if checks > 1 || !first {
+                        shrunk += 1;
+                    }
+                    let geom = f.dequantize(id, ground, &q)?;
+                    return Some((q, self.occludees.hidden(&view, &geom, radius)));
+                }
+                if r == Err(Refused::OutsideWindow) {
+                    break;
+                }
+                first = false;
+            }
+            dropped += 1;
+            if std::env::var("VOCC_DEBUG").is_ok() {
+                let dn = d_near(&cell, &[a, b]);
+                let all = Verifier::new(
+                    &cell,
+                    near.iter().map(|&i| self.set.polys[i as usize].as_slice()),
+                )
+                .is_hidden(a, b);
+                eprintln!("drop cell {id} level {k} len {:.1} dn {dn:.1} float-hidden-all {all} a {a} b {b}", a.distance(b));
+            }
+            None
+        });
+        stats.tried = tried;
+        stats.shrunk = shrunk;
+        stats.dropped = dropped;
+        let mut all: Vec<u32> = Vec::new();
+        for q in &vos {
+            if let Some(geom) = f.dequantize(id, ground, q) {
+                all.extend(self.occludees.hidden(&view, &geom, radius));
+            }
+        }
+        all.sort_unstable();
+        all.dedup();
+        stats.hidden_cost = self.occludees.cost_of(&all);
+        Record::Vos { ground, vos }
+    }
+
+    /// Rule 2 then rule 1 for a dequantized VO `a`–`b` of top `h`: the blockers that support it,
+    /// and the exact verifier over them alone.
+    #[allow(clippy::too_many_arguments)]
+    fn rule2_and_verify(
+        &self,
+        cell: &[DVec2],
+        near: &[u32],
+        support: &[Support],
+        (e0, e1, g): (f64, f64, f64),
+        h: f64,
+        a: DVec2,
+        b: DVec2,
+    ) -> bool {
+        let dn = d_near(cell, &[a, b]);
+        let used = near
+            .iter()
+            .zip(support)
+            .filter(|(_, s)| s.supports(e0, e1, g, h, dn))
+            .map(|(&i, _)| self.set.polys[i as usize].as_slice());
+        Verifier::new(cell, used).is_hidden(a, b)
+    }
+}
+
+/// Bakes `cells` in parallel on the current rayon pool; `progress(done)` is called as cells
+/// finish. Results come in the order of `cells`.
+pub fn bake_cells(
+    plan: &Plan,
+    cells: &[CellId],
+    progress: &(dyn Fn(usize) + Sync),
+) -> Vec<CellBake> {
+    let done = AtomicUsize::new(0);
+    cells
+        .par_iter()
+        .map(|&id| {
+            let r = plan.bake_cell(id);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            r
+        })
+        .collect()
+}
+
+/// The stored record of every cell of the grid, in id order: baked cells from `baked`, the rest
+/// empty.
+pub fn records(frame: &Frame, baked: &[CellBake]) -> Vec<Record> {
+    let n = frame.grid.cell_count() as usize;
+    let mut out = vec![
+        Record::Vos {
+            ground: 0,
+            vos: vec![]
+        };
+        n
+    ];
+    for c in baked {
+        if let Some(slot) = out.get_mut(c.id as usize) {
+            *slot = c.record.clone();
+        }
+    }
+    out
+}

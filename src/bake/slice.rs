@@ -1,0 +1,243 @@
+//! Slices: at which VO heights a cell is baked, and which blockers support each (rule 2).
+//!
+//! Input: a cell (convex, counter-clockwise), its eye range `[e0, e1]` and ground `g`, and the
+//! blockers near it with their base and top. Output: the slice levels (VO height levels of the
+//! store's frame), and for each VO the blockers that support it by rule 2.
+//! Invariants:
+//! - rule 2 (DESIGN.md section 3) decides support: `b <= min(e0, g)` and
+//!   `t >= e1 + (h - e1) * min(1, d_far(B) / d_near(s))`: the ray crosses the blocker at a
+//!   fraction `lambda` of its 2D length with `lambda <= d_far(B) / d_near(s)` (DESIGN.md) and
+//!   `lambda <= 1` (the crossing lies between the eye and the VO), so the brief's bound holds
+//!   with the smaller of the two ratios (proof in ARCHITECTURE.md, "Rules 2 and 3"); distances are computed in f64 and rounded
+//!   toward the conservative side (`d_far` up, `d_near` down, the bound up by
+//!   [`RULE2_SLACK_M`]), so a blocker admitted here supports the VO in exact arithmetic;
+//! - the *perspective-adjusted height* of a blocker, `e1 + (t - e1) max(1, d_near(B) / d_far(B))`, is the
+//!   VO top it supports for a VO as near as the blocker's nearest point. It only ranks blockers
+//!   for the slice histogram and picks the candidates of a slice; every VO is then checked
+//!   against rule 2 with its own `d_near(s)`.
+
+use glam::DVec2;
+
+/// Added to rule 2's height bound before comparing, metres: covers float rounding in it.
+pub const RULE2_SLACK_M: f64 = 1e-6;
+/// Relative rounding allowance of a computed distance.
+const DIST_ROUND: f64 = 1e-12;
+
+/// The greatest distance between a point of convex polygon `p` and one of convex polygon `q`,
+/// rounded up. (Distance is convex, so the maximum is at a pair of vertices.)
+pub fn d_far(p: &[DVec2], q: &[DVec2]) -> f64 {
+    let mut m: f64 = 0.0;
+    for a in p {
+        for b in q {
+            m = m.max(a.distance_squared(*b));
+        }
+    }
+    m.sqrt() * (1.0 + DIST_ROUND) + DIST_ROUND
+}
+
+fn point_segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let d = b - a;
+    let l2 = d.length_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + d * t)
+}
+
+/// The least distance between convex polygon `cell` and convex polygon (or segment) `q`, rounded
+/// down; 0 when they may meet. For disjoint convex sets the least distance is between a vertex of
+/// one and an edge of the other.
+pub fn d_near(cell: &[DVec2], q: &[DVec2]) -> f64 {
+    let edges = |p: &[DVec2]| -> Vec<(DVec2, DVec2)> {
+        if p.len() == 2 {
+            vec![(p[0], p[1])]
+        } else {
+            (0..p.len()).map(|i| (p[i], p[(i + 1) % p.len()])).collect()
+        }
+    };
+    let (ce, qe) = (edges(cell), edges(q));
+    let mut m = f64::INFINITY;
+    for &v in q {
+        for &(a, b) in &ce {
+            m = m.min(point_segment_distance(v, a, b));
+        }
+    }
+    for &v in cell {
+        for &(a, b) in &qe {
+            m = m.min(point_segment_distance(v, a, b));
+        }
+    }
+    // Segments that cross have no vertex–edge pair at distance 0; callers only pass sets whose
+    // interiors are disjoint, and a crossing would make rule 2 fail anyway, but stay safe.
+    for &(a, b) in &qe {
+        for &(c, d) in &ce {
+            if segments_may_cross(a, b, c, d) {
+                return 0.0;
+            }
+        }
+    }
+    (m * (1.0 - DIST_ROUND) - DIST_ROUND).max(0.0)
+}
+
+fn segments_may_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2) = (o(a, b, c), o(a, b, d));
+    let (d3, d4) = (o(c, d, a), o(c, d, b));
+    if d1 == 0.0 && d2 == 0.0 {
+        // Collinear: they meet only if their boxes do.
+        let (lo1, hi1) = (a.min(b), a.max(b));
+        let (lo2, hi2) = (c.min(d), c.max(d));
+        return lo1.x <= hi2.x && lo2.x <= hi1.x && lo1.y <= hi2.y && lo2.y <= hi1.y;
+    }
+    d1 * d2 <= 0.0 && d3 * d4 <= 0.0
+}
+
+/// What rule 2 needs to know of a blocker seen from one cell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Support {
+    pub base: f64,
+    pub top: f64,
+    /// Greatest distance between the cell and the blocker (rounded up).
+    pub d_far: f64,
+    /// Least distance between the cell and the blocker (rounded down).
+    pub d_near: f64,
+}
+
+impl Support {
+    pub fn new(cell: &[DVec2], poly: &[DVec2], base: f64, top: f64) -> Support {
+        Support {
+            base,
+            top,
+            d_far: d_far(cell, poly),
+            d_near: d_near(cell, poly),
+        }
+    }
+
+    /// Rule 2: this blocker supports a VO of top `h`, bottom `g`, at least `d_near_s` from the
+    /// cell, for eyes in `[e0, e1]`.
+    pub fn supports(&self, e0: f64, e1: f64, g: f64, h: f64, d_near_s: f64) -> bool {
+        if !(self.base <= e0.min(g)) || !(d_near_s > 0.0) {
+            return false;
+        }
+        let h = h.max(e1);
+        // The ray meets the blocker between the eye and the VO, so lambda <= 1 as well.
+        let bound = e1 + (h - e1) * (self.d_far / d_near_s).min(1.0);
+        self.top >= bound + RULE2_SLACK_M * (1.0 + bound.abs())
+    }
+
+    /// The perspective-adjusted height: the VO top this blocker supports for a VO at its own
+    /// nearest distance (0 when it cannot support one above the eyes).
+    pub fn adjusted_height(&self, e1: f64) -> f64 {
+        if self.top <= e1 || self.d_far <= 0.0 {
+            return 0.0;
+        }
+        e1 + (self.top - e1) * (self.d_near / self.d_far).max(1.0)
+    }
+}
+
+/// Picks up to `n` slice levels among `levels` (ascending VO tops, level index = position) from
+/// blockers given as (adjusted height, weight): the level at which the weight of blockers still
+/// tall enough falls to each of the fractions `1 - (i + 1/2) / n` of the total. Levels come out
+/// ascending and distinct; none when no blocker reaches the lowest level above 0.
+pub fn choose_levels(levels: &[f64], blockers: &[(f64, f64)], n: usize) -> Vec<u8> {
+    let total: f64 = blockers
+        .iter()
+        .filter(|(h, _)| *h >= levels.get(1).copied().unwrap_or(f64::INFINITY))
+        .map(|(_, w)| w)
+        .sum();
+    if n == 0 || !(total > 0.0) {
+        return Vec::new();
+    }
+    // Weight still standing at each level.
+    let standing: Vec<f64> = levels
+        .iter()
+        .map(|&l| {
+            blockers
+                .iter()
+                .filter(|(h, _)| *h >= l)
+                .map(|(_, w)| w)
+                .sum()
+        })
+        .collect();
+    let mut out: Vec<u8> = Vec::new();
+    for i in 0..n {
+        let f = 1.0 - (i as f64 + 0.5) / n as f64;
+        // The highest level (above 0) at which at least that share still stands.
+        if let Some(k) = (1..levels.len())
+            .rev()
+            .find(|&k| standing[k] >= f * total && standing[k] > 0.0)
+        {
+            if !out.contains(&(k as u8)) {
+                out.push(k as u8);
+            }
+        }
+    }
+    out.sort_unstable();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sq(x0: f64, y0: f64, s: f64) -> Vec<DVec2> {
+        vec![
+            DVec2::new(x0, y0),
+            DVec2::new(x0 + s, y0),
+            DVec2::new(x0 + s, y0 + s),
+            DVec2::new(x0, y0 + s),
+        ]
+    }
+
+    #[test]
+    fn distances_between_cell_and_blocker() {
+        let cell = sq(0.0, 0.0, 10.0);
+        let b = sq(20.0, 0.0, 10.0);
+        assert!((d_near(&cell, &b) - 10.0).abs() < 1e-9 && d_near(&cell, &b) <= 10.0);
+        let far = d_far(&cell, &b);
+        assert!(far >= (900.0f64 + 100.0).sqrt() && far < (1000.0f64).sqrt() + 1e-9);
+        let seg = [DVec2::new(5.0, 30.0), DVec2::new(50.0, 30.0)];
+        assert!((d_near(&cell, &seg) - 20.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn rule_2_bound() {
+        // A blocker 10 to 30 m from a 10 m cell; a VO 40 m away; eyes at 2 m.
+        let s = Support {
+            base: 0.0,
+            top: 12.0,
+            d_far: 30.0,
+            d_near: 10.0,
+        };
+        // Bound: 2 + (h - 2) * 30 / 40 <= 12 <=> h <= 15.33.
+        assert!(s.supports(1.5, 2.0, 0.0, 15.3, 40.0));
+        assert!(!s.supports(1.5, 2.0, 0.0, 15.4, 40.0));
+        // A VO nearer than the blocker's far side: lambda <= 1 caps the ratio, h <= t.
+        assert!(s.supports(1.5, 2.0, 0.0, 11.99, 20.0));
+        assert!(!s.supports(1.5, 2.0, 0.0, 12.01, 20.0));
+        // A raised base does not support a VO down to the ground.
+        let raised = Support { base: 0.5, ..s };
+        assert!(!raised.supports(1.5, 2.0, 0.0, 3.0, 40.0));
+        // Seen from its nearest distance the blocker supports its own top, no more.
+        assert_eq!(s.adjusted_height(2.0), 12.0);
+        let far = Support {
+            d_near: 60.0,
+            d_far: 30.0,
+            ..s
+        };
+        assert_eq!(far.adjusted_height(2.0), 22.0);
+    }
+
+    #[test]
+    fn levels_split_the_weight() {
+        let levels = [2.0, 3.0, 5.0, 8.0, 13.0];
+        // Half the weight reaches 5, the other half reaches 13.
+        let b = [(6.0, 1.0), (6.0, 1.0), (20.0, 1.0), (20.0, 1.0)];
+        // One slice: the highest level that half the weight still reaches.
+        assert_eq!(choose_levels(&levels, &b, 1), vec![4]);
+        assert_eq!(choose_levels(&levels, &b, 2), vec![2, 4]);
+        assert_eq!(choose_levels(&levels, &[], 3), Vec::<u8>::new());
+    }
+}
