@@ -6,10 +6,16 @@
 //! positions give `None`, malformed bytes give an error); every culling decision is conservative
 //! (rule 3, [`occlusion`]).
 
+pub mod crc;
+pub mod format;
 pub mod frame;
 pub mod grid;
 pub mod occlusion;
 
+pub use format::{
+    decode_blob, decode_frame, encode_blob, encode_frame, encode_store, validate_frame, CellRecord,
+    FormatError, Store, VoList,
+};
 pub use frame::{CellView, Frame, QVo, VoGeom, MAX_VOS_PER_CELL};
 pub use grid::{CellId, GridDescriptor};
 pub use occlusion::{Cover, PreparedVo};
