@@ -7,11 +7,13 @@
 //! (rule 3, [`occlusion`]).
 
 pub mod crc;
+pub mod culler;
 pub mod format;
 pub mod frame;
 pub mod grid;
 pub mod occlusion;
 
+pub use culler::{pvs, BoxTree};
 pub use format::{
     decode_blob, decode_frame, encode_blob, encode_frame, encode_store, validate_frame, CellRecord,
     FormatError, Store, VoList,
