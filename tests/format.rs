@@ -14,7 +14,7 @@ use vocc::runtime::format::{
     decode_blob, decode_frame, encode_blob, encode_frame, encode_store, CellRecord, FormatError,
     Store, VoList, BLOB_MIN_LEN, FRAME_LEN, HEADER_LEN,
 };
-use vocc::runtime::{Frame, GridDescriptor, QVo};
+use vocc::runtime::{pvs, BoxTree, Frame, GridDescriptor, QVo};
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting, per thread (tests run in parallel).
@@ -202,6 +202,41 @@ fn doc_worked_vo_decoding_matches_the_frame() {
         136 + 10_000 + 4 * 10_000usize.div_ceil(64) + 9_000 * 41,
         379_764
     );
+}
+
+#[test]
+fn doc_store_drives_the_culler() {
+    // What an engine does: parse once, build the tree once, query on cell entry.
+    let bytes = doc_store();
+    let store = Store::parse(&bytes).unwrap();
+    let boxes = [
+        [50.0, 115.0, 162.0, 55.0, 118.0, 164.5], // 0: low, right behind cell 0's first VO
+        [50.0, 115.0, 162.0, 55.0, 118.0, 180.0], // 1: too tall
+        [50.0, 40.0, 162.0, 55.0, 45.0, 163.0],   // 2: inside cell 0
+        [250.0, 50.0, 162.0, 260.0, 60.0, 163.0], // 3: inside cell 2
+    ];
+    let tree = BoxTree::new(&boxes);
+    let mut visible = Vec::new();
+    let id = store.cell_at(10.0, 10.0).unwrap();
+    pvs(
+        store.frame(),
+        id,
+        &store.cell(id).unwrap(),
+        &tree,
+        &mut visible,
+    );
+    assert_eq!(visible, [1, 2, 3]);
+    // Skipped cell 1, empty cell 2: everything.
+    for id in [1, 2] {
+        pvs(
+            store.frame(),
+            id,
+            &store.cell(id).unwrap(),
+            &tree,
+            &mut visible,
+        );
+        assert_eq!(visible, [0, 1, 2, 3]);
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
