@@ -12,6 +12,9 @@ use clap::{Args, Parser, Subcommand};
 
 use vocc::scene::{self, summary, ReadOptions};
 
+mod bake;
+mod store;
+
 #[derive(Parser)]
 #[command(name = "vocc", version, about = "Virtual occluders for city models")]
 struct Cli {
@@ -21,6 +24,55 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Bake a scene into an occluder store: at most 10 virtual occluders per view cell.
+    Bake(bake::BakeArgs),
+    /// Describe a store: grid, frame, VOs per cell, bytes; or one cell's VOs (world coordinates).
+    Inspect {
+        /// Store file.
+        store: PathBuf,
+        /// Show this cell's VOs.
+        #[arg(long, value_name = "ID")]
+        cell: Option<u32>,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Build the potentially visible set of one cell from a store and the scene's objects.
+    Pvs {
+        /// Store file.
+        store: PathBuf,
+        /// Scene files (the occludees: each object's bounding box).
+        #[arg(required = true)]
+        scene: Vec<PathBuf>,
+        #[command(flatten)]
+        read: ReadArgs,
+        /// The cell, by id.
+        #[arg(long, value_name = "ID", conflicts_with = "at")]
+        cell: Option<u32>,
+        /// The cell holding this world position X,Y.
+        #[arg(long, value_name = "X,Y", value_parser = parse_xy, allow_hyphen_values = true)]
+        at: Option<(f64, f64)>,
+        /// Print {"cell": ID, "objects": N, "pvs": [object indices in input order]}.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Export one cell's VOs: as JSON (world coordinates), as OBJ quads, or as a per-cell blob.
+    Export {
+        /// Store file.
+        store: PathBuf,
+        /// The cell.
+        #[arg(long, value_name = "ID")]
+        cell: u32,
+        /// Print the VOs as JSON on stdout.
+        #[arg(long, conflicts_with_all = ["obj", "blob"])]
+        json: bool,
+        /// Write the VO quads as an OBJ file.
+        #[arg(long, value_name = "FILE", conflicts_with = "blob")]
+        obj: Option<PathBuf>,
+        /// Write the cell's self-contained blob (and FILE.frame, the frame it decodes with).
+        #[arg(long, value_name = "FILE")]
+        blob: Option<PathBuf>,
+    },
     /// Load scene files and report objects, blockers, convex pieces, repairs and timings.
     Info {
         /// Scene files: GeoJSON footprints, CityJSON (0.8, 1.x, 2.0) or OBJ.
@@ -126,6 +178,31 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Bake(a) => bake::run(a),
+        Command::Inspect { store, cell, json } => store::inspect(store, cell, json),
+        Command::Pvs {
+            store,
+            scene,
+            read,
+            cell,
+            at,
+            json,
+        } => store::pvs(store, scene, &read, cell, at, json),
+        Command::Export {
+            store,
+            cell,
+            json,
+            obj,
+            blob,
+        } => {
+            let to = match (json, obj, blob) {
+                (_, Some(f), None) => store::ExportTo::Obj(f),
+                (_, None, Some(f)) => store::ExportTo::Blob(f),
+                (true, None, None) => store::ExportTo::Json,
+                _ => anyhow::bail!("give one of --json, --obj FILE, --blob FILE"),
+            };
+            store::export(store, cell, to)
+        }
         Command::Info { scene, read, json } => {
             let s = scene::load(&scene, &read.options())?;
             let sum = summary::summarize(&s);

@@ -1,0 +1,188 @@
+//! `vocc bake`: scene files in, an occluder store out.
+//!
+//! Input: scene files, reader options and bake options. Output: the store file (written
+//! atomically), a progress bar on stderr while cells bake, and a summary on stderr.
+//! Invariant: the store's bytes depend only on the inputs and options, never on `--threads`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use vocc::bake::pipeline::{self, BakeParams, Plan, Record, Slices};
+use vocc::runtime::format::{encode_store, CellRecord};
+use vocc::scene;
+
+use crate::{write_atomically, ReadArgs};
+
+#[derive(Args)]
+pub struct BakeArgs {
+    /// Scene files: GeoJSON footprints, CityJSON (0.8, 1.x, 2.0) or OBJ.
+    #[arg(required = true)]
+    pub scene: Vec<PathBuf>,
+    #[command(flatten)]
+    pub read: ReadArgs,
+    /// Output store file.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Side of the square view cells, metres.
+    #[arg(long, default_value_t = 100.0, value_name = "M")]
+    pub cell_size: f64,
+    /// Eye heights above the ground, metres: LOW..HIGH.
+    #[arg(long, default_value = "1.5..2.0", value_parser = parse_range, value_name = "LOW..HIGH")]
+    pub eye: (f64, f64),
+    /// Slices per cell: `auto` (up to 5) or 1 to 5.
+    #[arg(long, default_value = "auto", value_parser = parse_slices)]
+    pub slices: Slices,
+    /// Most VOs per cell (1 to 10).
+    #[arg(long, default_value_t = 10)]
+    pub max_vos: usize,
+    /// Worker threads (default: all cores). The output does not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Bake only the cells meeting this world rectangle X0,Y0,X1,Y1 (the others stay empty).
+    #[arg(long, value_parser = parse_rect, allow_hyphen_values = true, value_name = "X0,Y0,X1,Y1")]
+    pub region: Option<[f64; 4]>,
+}
+
+fn parse_range(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("expected LOW..HIGH, got {s:?}"))?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("{t:?} is not a finite number"))
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+fn parse_slices(s: &str) -> Result<Slices, String> {
+    if s == "auto" {
+        return Ok(Slices::Auto);
+    }
+    match s.parse::<u8>() {
+        Ok(n @ 1..=5) => Ok(Slices::Fixed(n)),
+        _ => Err(format!("expected `auto` or 1 to 5, got {s:?}")),
+    }
+}
+
+fn parse_rect(s: &str) -> Result<[f64; 4], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<Vec<f64>>>()
+        .ok_or_else(|| format!("expected four numbers X0,Y0,X1,Y1, got {s:?}"))?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 <= x1 && y0 <= y1 => Ok([x0, y0, x1, y1]),
+        _ => Err(format!(
+            "expected X0,Y0,X1,Y1 with X0 <= X1 and Y0 <= Y1, got {s:?}"
+        )),
+    }
+}
+
+/// Converts the pipeline's records to the store's.
+pub fn store_records(records: &[Record]) -> Result<Vec<CellRecord>> {
+    records
+        .iter()
+        .map(|r| match r {
+            Record::Skipped => Ok(CellRecord::Skipped),
+            Record::Vos { ground, vos } => Ok(CellRecord::new(*ground, vos)?),
+        })
+        .collect()
+}
+
+pub fn run(a: BakeArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let s = scene::load(&a.scene, &a.read.options())?;
+    let load_s = t0.elapsed().as_secs_f64();
+    let region = a.region.map(|[x0, y0, x1, y1]| {
+        [
+            x0 - s.origin.x,
+            y0 - s.origin.y,
+            x1 - s.origin.x,
+            y1 - s.origin.y,
+        ]
+    });
+    let params = BakeParams {
+        cell_size: a.cell_size,
+        eye: a.eye,
+        slices: a.slices,
+        max_vos: a.max_vos,
+        region,
+        ..BakeParams::default()
+    };
+    let plan = Plan::new(&s, params)?;
+    let cells = plan.cells();
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = a.threads {
+        anyhow::ensure!(n >= 1, "--threads must be at least 1");
+        pool = pool.num_threads(n);
+    }
+    let pool = pool.build().context("cannot start the worker threads")?;
+    let bar = indicatif::ProgressBar::new(cells.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "baking {bar:40} {pos}/{len} cells, {elapsed} elapsed, about {eta} left",
+        )
+        .expect("a valid template"),
+    );
+    let t1 = Instant::now();
+    let baked = pool.install(|| {
+        pipeline::bake_cells(&plan, &cells, &|_| {
+            bar.inc(1);
+        })
+    });
+    bar.finish_and_clear();
+    let bake_s = t1.elapsed().as_secs_f64();
+    let records = store_records(&pipeline::records(&plan.frame, &baked))?;
+    let bytes = encode_store(&plan.frame, &records)?;
+    write_atomically(&a.output, |w| std::io::Write::write_all(w, &bytes))?;
+
+    let n = baked.len().max(1);
+    let vos: usize = records.iter().map(|r| r.vos().len()).sum();
+    let most = records.iter().map(|r| r.vos().len()).max().unwrap_or(0);
+    let skipped = records
+        .iter()
+        .filter(|r| matches!(r, CellRecord::Skipped))
+        .count();
+    let mut ms: Vec<f64> = baked.iter().map(|c| c.stats.ms).collect();
+    ms.sort_by(f64::total_cmp);
+    let pct = |p: f64| {
+        ms.get(((ms.len() as f64 - 1.0) * p) as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    let (tried, shrunk, dropped) = baked.iter().fold((0, 0, 0), |(t, s, d), c| {
+        (t + c.stats.tried, s + c.stats.shrunk, d + c.stats.dropped)
+    });
+    let g = &plan.frame.grid;
+    eprintln!(
+        "grid {} x {} cells of {} m; baked {} cells ({} skipped: inside a building) in {:.1} s on {} threads (scene loaded in {:.1} s)",
+        g.nx,
+        g.ny,
+        g.cell_size,
+        baked.len(),
+        skipped,
+        bake_s,
+        pool.current_num_threads(),
+        load_s
+    );
+    eprintln!(
+        "VOs: {vos} ({:.2} per baked cell, at most {most}); per cell {:.1} ms median, {:.1} ms p95; quantization: {tried} tried, {shrunk} shrunk, {dropped} dropped",
+        vos as f64 / n as f64,
+        pct(0.5),
+        pct(0.95)
+    );
+    eprintln!(
+        "wrote {} bytes to {} ({:.1} bytes per cell over {} cells)",
+        bytes.len(),
+        a.output.display(),
+        bytes.len() as f64 / records.len().max(1) as f64,
+        records.len()
+    );
+    Ok(())
+}

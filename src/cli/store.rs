@@ -1,0 +1,299 @@
+//! `vocc inspect`, `vocc pvs` and `vocc export`: reading a store.
+//!
+//! Input: a store file (and, for `pvs`, the scene whose objects are the occludees).
+//! Output: reports on stdout (text or JSON), or the files `export` is asked for (written
+//! atomically). Invariant: everything read from the store goes through the runtime decoder, so
+//! these commands see exactly what an engine sees.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use serde_json::json;
+
+use vocc::runtime::culler::{pvs_with_stats, BoxTree};
+use vocc::runtime::format::{encode_blob, encode_frame, CellRecord, Store};
+use vocc::runtime::{CellId, Frame};
+use vocc::scene;
+
+use crate::{write_atomically, ReadArgs};
+
+pub fn read_store(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
+}
+
+pub fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<Store<'a>> {
+    Store::parse(bytes).with_context(|| format!("{} is not a valid vocc store", path.display()))
+}
+
+fn cell_record(store: &Store, id: CellId) -> Result<CellRecord> {
+    anyhow::ensure!(
+        id < store.cell_count(),
+        "cell {id} is outside the grid (cells 0..{})",
+        store.cell_count()
+    );
+    Ok(store.cell(id)?)
+}
+
+/// The VOs of a cell in world coordinates, as JSON.
+fn vos_json(f: &Frame, id: CellId, rec: &CellRecord) -> Vec<serde_json::Value> {
+    let o = f.origin;
+    rec.vos()
+        .iter()
+        .filter_map(|q| {
+            let g = f.dequantize(id, rec.ground(), q)?;
+            let hex: String = q.to_bytes().iter().map(|b| format!("{b:02x}")).collect();
+            Some(json!({
+                "a": [g.a[0] + o[0], g.a[1] + o[1]],
+                "b": [g.b[0] + o[0], g.b[1] + o[1]],
+                "bottom": g.g + o[2],
+                "top": g.h + o[2],
+                "level": q.level,
+                "bytes": hex,
+            }))
+        })
+        .collect()
+}
+
+fn cell_json(f: &Frame, id: CellId, rec: &CellRecord) -> serde_json::Value {
+    let o = f.origin;
+    let r = f.grid.cell_rect(id).unwrap_or([0.0; 4]);
+    let view = f.cell_view(id, rec.ground());
+    json!({
+        "cell": id,
+        "rect": [r[0] + o[0], r[1] + o[1], r[2] + o[0], r[3] + o[1]],
+        "skipped": matches!(rec, CellRecord::Skipped),
+        "ground": f.ground_z(rec.ground()) + o[2],
+        "eyes": view.map(|v| [v.e0 + o[2], v.e1 + o[2]]),
+        "vos": vos_json(f, id, rec),
+    })
+}
+
+pub fn inspect(path: PathBuf, cell: Option<CellId>, as_json: bool) -> Result<()> {
+    let bytes = read_store(&path)?;
+    let store = parse(&path, &bytes)?;
+    let f = *store.frame();
+    let mut out = std::io::stdout().lock();
+    if let Some(id) = cell {
+        let rec = cell_record(&store, id)?;
+        let v = cell_json(&f, id, &rec);
+        if as_json {
+            serde_json::to_writer_pretty(&mut out, &v)?;
+            writeln!(out)?;
+        } else {
+            writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        }
+        return Ok(());
+    }
+    let n = store.cell_count();
+    let mut hist = [0usize; 11];
+    let mut skipped = 0;
+    let mut vos = 0;
+    for id in 0..n {
+        match store.cell(id)? {
+            CellRecord::Skipped => skipped += 1,
+            r => {
+                hist[r.vos().len()] += 1;
+                vos += r.vos().len();
+            }
+        }
+    }
+    let most = (0..=10).rev().find(|&k| hist[k] > 0).unwrap_or(0);
+    let (major, minor) = store.version();
+    let v = json!({
+        "file": path.display().to_string(),
+        "version": format!("{major}.{minor}"),
+        "bytes": bytes.len(),
+        "cells": n,
+        "bytes_per_cell": bytes.len() as f64 / n.max(1) as f64,
+        "skipped_cells": skipped,
+        "vos": vos,
+        "vos_per_cell": vos as f64 / n.max(1) as f64,
+        "max_vos_per_cell": most,
+        "cells_by_vo_count": hist,
+        "origin": f.origin,
+        "grid": {"min_x": f.grid.min_x, "min_y": f.grid.min_y, "cell_size": f.grid.cell_size, "nx": f.grid.nx, "ny": f.grid.ny},
+        "quantum_m": f.quantum,
+        "eye": [f.eye_lo, f.eye_hi],
+        "ground": {"z0": f.ground_z0, "step": f.ground_step},
+        "vo_top_levels_above_eye_m": (0..16).map(|k| f.vo_top(0.0, k)).collect::<Vec<f64>>(),
+    });
+    if as_json {
+        serde_json::to_writer_pretty(&mut out, &v)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{}: vocc store {major}.{minor}, {} bytes, {n} cells ({:.1} bytes per cell)",
+        path.display(),
+        bytes.len(),
+        bytes.len() as f64 / n.max(1) as f64
+    )?;
+    writeln!(
+        out,
+        "grid: {} x {} cells of {} m from local ({}, {}); origin (world) {:.3}, {:.3}, {:.3}",
+        f.grid.nx,
+        f.grid.ny,
+        f.grid.cell_size,
+        f.grid.min_x,
+        f.grid.min_y,
+        f.origin[0],
+        f.origin[1],
+        f.origin[2]
+    )?;
+    writeln!(
+        out,
+        "VOs: {vos} ({:.2} per cell, at most {most}); {skipped} cells skipped (inside a building)",
+        vos as f64 / n.max(1) as f64
+    )?;
+    let h: Vec<String> = hist
+        .iter()
+        .enumerate()
+        .filter(|(_, &c)| c > 0)
+        .map(|(k, c)| format!("{k}: {c}"))
+        .collect();
+    writeln!(out, "cells by VO count: {}", h.join(", "))?;
+    writeln!(
+        out,
+        "quantization: {} m grid; eyes {}..{} m above the ground; ground {}",
+        f.quantum,
+        f.eye_lo,
+        f.eye_hi,
+        if f.per_cell_ground() {
+            format!("per cell, {} + k * {} m", f.ground_z0, f.ground_step)
+        } else {
+            format!("flat at {} m (local)", f.ground_z0)
+        }
+    )?;
+    Ok(())
+}
+
+/// Which cell a command is about: `--cell ID`, or `--at X,Y` in world coordinates.
+pub fn which_cell(store: &Store, cell: Option<CellId>, at: Option<(f64, f64)>) -> Result<CellId> {
+    match (cell, at) {
+        (Some(id), _) => {
+            anyhow::ensure!(
+                id < store.cell_count(),
+                "cell {id} is outside the grid (cells 0..{})",
+                store.cell_count()
+            );
+            Ok(id)
+        }
+        (None, Some((x, y))) => {
+            let o = store.frame().origin;
+            store
+                .cell_at(x - o[0], y - o[1])
+                .with_context(|| format!("({x}, {y}) lies outside the store's grid"))
+        }
+        (None, None) => anyhow::bail!("give --cell ID or --at X,Y"),
+    }
+}
+
+pub fn pvs(
+    path: PathBuf,
+    scene_files: Vec<PathBuf>,
+    read: &ReadArgs,
+    cell: Option<CellId>,
+    at: Option<(f64, f64)>,
+    as_json: bool,
+) -> Result<()> {
+    let bytes = read_store(&path)?;
+    let store = parse(&path, &bytes)?;
+    let id = which_cell(&store, cell, at)?;
+    let rec = store.cell(id)?;
+    let s = scene::load(&scene_files, &read.options())?;
+    let o = s.origin;
+    let world: Vec<[f64; 6]> = s
+        .objects
+        .iter()
+        .map(|ob| {
+            let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
+            [a.x, a.y, a.z, b.x, b.y, b.z]
+        })
+        .collect();
+    let tree = BoxTree::from_world(&world, store.frame().origin);
+    let mut visible = Vec::new();
+    let t = Instant::now();
+    let st = pvs_with_stats(store.frame(), id, &rec, &tree, &mut visible);
+    let us = t.elapsed().as_secs_f64() * 1e6;
+    let mut out = std::io::stdout().lock();
+    if as_json {
+        serde_json::to_writer(
+            &mut out,
+            &json!({"cell": id, "objects": world.len(), "pvs": visible}),
+        )?;
+        writeln!(out)?;
+    } else {
+        writeln!(
+            out,
+            "cell {id}: {} of {} objects potentially visible ({:.1}%), {} VOs, built in {us:.0} µs ({} nodes tested)",
+            visible.len(),
+            world.len(),
+            100.0 * visible.len() as f64 / world.len().max(1) as f64,
+            st.vos,
+            st.nodes_tested
+        )?;
+    }
+    Ok(())
+}
+
+pub enum ExportTo {
+    Json,
+    Obj(PathBuf),
+    Blob(PathBuf),
+}
+
+pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
+    let bytes = read_store(&path)?;
+    let store = parse(&path, &bytes)?;
+    let rec = cell_record(&store, id)?;
+    let f = *store.frame();
+    match to {
+        ExportTo::Json => {
+            let mut out = std::io::stdout().lock();
+            serde_json::to_writer_pretty(&mut out, &cell_json(&f, id, &rec))?;
+            writeln!(out)?;
+        }
+        ExportTo::Obj(file) => {
+            let o = f.origin;
+            write_atomically(&file, |w| {
+                writeln!(
+                    w,
+                    "# vocc: the virtual occluders of cell {id}, world coordinates"
+                )?;
+                let mut v = 0;
+                for (k, q) in rec.vos().iter().enumerate() {
+                    let Some(g) = f.dequantize(id, rec.ground(), q) else {
+                        continue;
+                    };
+                    writeln!(w, "o vo_{k}")?;
+                    for (p, z) in [(g.a, g.g), (g.b, g.g), (g.b, g.h), (g.a, g.h)] {
+                        writeln!(w, "v {} {} {}", p[0] + o[0], p[1] + o[1], z + o[2])?;
+                    }
+                    writeln!(w, "f {} {} {} {}", v + 1, v + 2, v + 3, v + 4)?;
+                    v += 4;
+                }
+                Ok(())
+            })?;
+            eprintln!("wrote {} VO quads to {}", rec.vos().len(), file.display());
+        }
+        ExportTo::Blob(file) => {
+            let blob = encode_blob(&f, id, &rec)?;
+            write_atomically(&file, |w| w.write_all(&blob))?;
+            // The frame an engine needs beside its blobs, once per store.
+            let frame_file = file.with_extension("frame");
+            write_atomically(&frame_file, |w| w.write_all(&encode_frame(&f)))?;
+            eprintln!(
+                "wrote cell {id} ({} VOs) as a {}-byte blob to {}, and the {}-byte frame it decodes with to {}",
+                rec.vos().len(),
+                blob.len(),
+                file.display(),
+                encode_frame(&f).len(),
+                frame_file.display()
+            );
+        }
+    }
+    Ok(())
+}
