@@ -120,6 +120,8 @@ pub struct CellStats {
     pub shrunk: usize,
     /// Of those, dropped: no grid segment near them passed rule 2 and the verifier.
     pub dropped: usize,
+    /// Exact verifications run on dequantized VOs.
+    pub checks: usize,
     /// Occludee cost hidden by the stored VOs (rule 3, within the weighting radius).
     pub hidden_cost: u64,
     pub ms: f64,
@@ -403,6 +405,8 @@ impl<'s> Plan<'s> {
         let mut tried = 0;
         let mut shrunk = 0;
         let mut dropped = 0;
+        let mut all_checks = 0;
+        let all: Vec<(u32, Support)> = near.iter().copied().zip(support.iter().copied()).collect();
         let vos = greedy(&hidden, &self.occludees.cost, self.params.max_vos, |i| {
             let (k, a, b) = cands[i];
             tried += 1;
@@ -413,8 +417,9 @@ impl<'s> Plan<'s> {
                 let mut checks = 0;
                 let r = quantize(f, id, ground, level, a, b, |qa, qb| {
                     checks += 1;
+                    all_checks += 1;
                     let h = f.vo_top(e1, level);
-                    self.rule2_and_verify(&cell, &near, &support, (e0, e1, g), h, qa, qb)
+                    self.rule2_and_verify(&cell, &all, (e0, e1, g), h, qa, qb)
                 });
                 if let Ok(q) = r {
                     if checks > 1 || !first {
@@ -443,6 +448,7 @@ impl<'s> Plan<'s> {
         stats.tried = tried;
         stats.shrunk = shrunk;
         stats.dropped = dropped;
+        stats.checks = all_checks;
         let mut all: Vec<u32> = Vec::new();
         for q in &vos {
             if let Some(geom) = f.dequantize(id, ground, q) {
@@ -457,23 +463,20 @@ impl<'s> Plan<'s> {
 
     /// Rule 2 then rule 1 for a dequantized VO `a`–`b` of top `h`: the blockers that support it,
     /// and the exact verifier over them alone.
-    #[allow(clippy::too_many_arguments)]
     fn rule2_and_verify(
         &self,
         cell: &[DVec2],
-        near: &[u32],
-        support: &[Support],
+        blockers: &[(u32, Support)],
         (e0, e1, g): (f64, f64, f64),
         h: f64,
         a: DVec2,
         b: DVec2,
     ) -> bool {
         let dn = d_near(cell, &[a, b]);
-        let used = near
+        let used = blockers
             .iter()
-            .zip(support)
             .filter(|(_, s)| s.supports(e0, e1, g, h, dn))
-            .map(|(&i, _)| self.set.polys[i as usize].as_slice());
+            .map(|&(i, _)| self.set.polys[i as usize].as_slice());
         Verifier::new(cell, used).is_hidden(a, b)
     }
 }

@@ -156,8 +156,13 @@ pub fn run(a: BakeArgs) -> Result<()> {
             .copied()
             .unwrap_or(0.0)
     };
-    let (tried, shrunk, dropped) = baked.iter().fold((0, 0, 0), |(t, s, d), c| {
-        (t + c.stats.tried, s + c.stats.shrunk, d + c.stats.dropped)
+    let (tried, shrunk, dropped, checks) = baked.iter().fold((0, 0, 0, 0), |(t, s, d, k), c| {
+        (
+            t + c.stats.tried,
+            s + c.stats.shrunk,
+            d + c.stats.dropped,
+            k + c.stats.checks,
+        )
     });
     let g = &plan.frame.grid;
     eprintln!(
@@ -172,7 +177,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         load_s
     );
     eprintln!(
-        "VOs: {vos} ({:.2} per baked cell, at most {most}); per cell {:.1} ms median, {:.1} ms p95; quantization: {tried} tried, {shrunk} shrunk, {dropped} dropped",
+        "VOs: {vos} ({:.2} per baked cell, at most {most}); per cell {:.1} ms median, {:.1} ms p95; quantization: {tried} tried, {shrunk} shrunk, {dropped} dropped, {checks} exact checks",
         vos as f64 / n as f64,
         pct(0.5),
         pct(0.95)

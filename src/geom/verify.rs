@@ -60,6 +60,8 @@ use super::predicates::{
 pub const MIN_PIECE_M: f64 = 0.01;
 /// Deepest bisection.
 pub const MAX_DEPTH: u32 = 30;
+/// Most bisections of a piece in [`Verifier::is_hidden`] (pieces down to 1/1024 of the segment).
+pub const CHECK_DEPTH: u32 = 10;
 
 /// A hidden sub-interval of the verified segment: parameters along `a -> b` and the exact
 /// endpoints (each lies exactly on the segment).
@@ -114,8 +116,8 @@ impl<'a> Verifier<'a> {
         }
     }
 
-    /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
-    pub fn hidden_parts(&self, a: DVec2, b: DVec2) -> Vec<Hidden> {
+    /// The blockers that may block a segment from the cell to `[a, b]`.
+    fn near(&self, a: DVec2, b: DVec2) -> Vec<&'a [DVec2]> {
         // Only blockers whose box meets the hull of the cell and the segment can block.
         let (mut lo, mut hi) = bbox(self.cell);
         lo = lo.min(a).min(b);
@@ -131,13 +133,18 @@ impl<'a> Verifier<'a> {
         // interior misses the hull can at most touch such segments on its boundary. Leaving it
         // out can only certify less, never more.
         let hull = convex_hull(self.cell.iter().copied().chain([a, b]));
-        let near: Vec<&[DVec2]> = if hull.len() >= 3 {
+        if hull.len() >= 3 {
             near.into_iter()
                 .filter(|b| !convex_interiors_disjoint(&hull, b))
                 .collect()
         } else {
             near
-        };
+        }
+    }
+
+    /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
+    pub fn hidden_parts(&self, a: DVec2, b: DVec2) -> Vec<Hidden> {
+        let near = self.near(a, b);
         let mut out: Vec<Hidden> = Vec::new();
         let mut stack = vec![(0.0f64, 1.0f64, a, b, 0u32)];
         // Depth-first, left piece first, so pieces come out in order.
@@ -164,10 +171,28 @@ impl<'a> Verifier<'a> {
         out
     }
 
-    /// True when the whole closed segment `[a, b]` is certified hidden.
+    /// True when the whole closed segment `[a, b]` is certified hidden. Same certificates as
+    /// [`Self::hidden_parts`], but it stops at the first piece that cannot be certified, and
+    /// splits at most [`CHECK_DEPTH`] times: a yes/no answer for the bake's final gate.
     pub fn is_hidden(&self, a: DVec2, b: DVec2) -> bool {
-        let parts = self.hidden_parts(a, b);
-        parts.len() == 1 && parts[0].p0 == a && parts[0].p1 == b
+        let near = self.near(a, b);
+        let mut stack = vec![(a, b, 0u32)];
+        while let Some((p0, p1, depth)) = stack.pop() {
+            if self.certify(&near, p0, p1) {
+                continue;
+            }
+            if depth >= CHECK_DEPTH || p0.distance(p1) < 2.0 * MIN_PIECE_M {
+                return false;
+            }
+            match exact_midpoint(p0, p1) {
+                Some(m) => {
+                    stack.push((m, p1, depth + 1));
+                    stack.push((p0, m, depth + 1));
+                }
+                None => return false,
+            }
+        }
+        true
     }
 
     /// Looks for a certificate that holds at both ends of `[p0, p1]` (and at an exact point
