@@ -147,3 +147,141 @@ fn render_rejects_a_malformed_point() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("expected X,Y"));
 }
+
+/// Bakes a 3 x 3-cell region of Lyon into `dir/lyon.vocc`.
+fn bake_lyon_region(dir: &std::path::Path) -> std::path::PathBuf {
+    let store = dir.join("lyon.vocc");
+    let out = vocc(&[
+        "bake",
+        LYON,
+        "--height-attr",
+        "HAUTEUR",
+        "--region",
+        "1841900,5175950,1842100,5176150",
+        "-o",
+        store.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("baked 9 cells"), "{err}");
+    assert!(err.contains("bytes per cell"), "{err}");
+    store
+}
+
+#[test]
+fn bake_then_inspect_pvs_and_export() {
+    let dir = common::temp_dir("cli-bake");
+    let store = bake_lyon_region(&dir);
+    let s = store.to_str().unwrap();
+    // No temporary file is left beside the store.
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["lyon.vocc"]);
+
+    let out = vocc(&["inspect", s, "--json"]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["max_vos_per_cell"].as_u64().unwrap() <= 10);
+    assert!(v["vos"].as_u64().unwrap() >= 9, "{v}");
+    assert_eq!(v["cells"], 228);
+    assert_eq!(v["bytes"], std::fs::metadata(&store).unwrap().len());
+
+    // The cell of the README's picture.
+    let out = vocc(&[
+        "pvs",
+        s,
+        LYON,
+        "--height-attr",
+        "HAUTEUR",
+        "--at",
+        "1842000,5176050",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let p: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let id = p["cell"].as_u64().unwrap();
+    assert_eq!(p["objects"], 2576);
+    let pvs: Vec<u64> = p["pvs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    assert!(pvs.windows(2).all(|w| w[0] < w[1]), "ascending, no repeats");
+    assert!(pvs.len() < 2576, "the VOs cull something");
+    assert!(pvs.len() > 100);
+
+    let cell = id.to_string();
+    let out = vocc(&["export", s, "--cell", &cell, "--json"]);
+    assert!(out.status.success());
+    let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let vos = e["vos"].as_array().unwrap();
+    assert!(!vos.is_empty() && vos.len() <= 10);
+    // World coordinates: near the cell, far from the local origin.
+    assert!(vos[0]["a"][0].as_f64().unwrap() > 1_840_000.0);
+
+    let obj = dir.join("cell.obj");
+    let out = vocc(&["export", s, "--cell", &cell, "--obj", obj.to_str().unwrap()]);
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("v ")).count(),
+        4 * vos.len()
+    );
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("f ")).count(),
+        vos.len()
+    );
+
+    let blob = dir.join("cell.blob");
+    let out = vocc(&[
+        "export",
+        s,
+        "--cell",
+        &cell,
+        "--blob",
+        blob.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let frame =
+        vocc::runtime::decode_frame(&std::fs::read(blob.with_extension("frame")).unwrap()).unwrap();
+    let (bid, rec) = vocc::runtime::decode_blob(&frame, &std::fs::read(&blob).unwrap()).unwrap();
+    assert_eq!(bid as u64, id);
+    assert_eq!(rec.vos().len(), vos.len());
+}
+
+#[test]
+fn bake_refuses_bad_options_and_pvs_bad_stores() {
+    let dir = common::temp_dir("cli-bake-bad");
+    let store = dir.join("x.vocc");
+    let s = store.to_str().unwrap();
+    for (args, want) in [
+        (vec!["--cell-size", "0"], "cell size"),
+        (vec!["--max-vos", "11"], "--max-vos"),
+        (vec!["--eye", "2..1"], "eye heights"),
+        (vec!["--slices", "6"], "--slices"),
+    ] {
+        let mut a = vec!["bake", LYON, "--height-attr", "HAUTEUR", "-o", s];
+        a.extend(args);
+        let out = vocc(&a);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{err}");
+        assert!(!store.exists(), "no output after a refused bake");
+    }
+    // Not a store.
+    let out = vocc(&["inspect", LYON]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("not a valid vocc store"), "{err}");
+}
