@@ -21,7 +21,8 @@
 //!   infinite coordinate, or `min > max` on an axis; kept out of the hierarchy and always
 //!   returned), every object of a skipped cell, of a cell without VOs and of a cell id outside
 //!   the frame's grid;
-//! - a query allocates nothing beyond growing `out`; the traversal stack is a fixed array (the
+//! - a query allocates nothing beyond growing `out` (which also holds a bitmap of the culled
+//!   objects while the query runs, so no sort is needed); the traversal stack is a fixed array (the
 //!   median split bounds the depth by `log2` of the box count; past the array, a subtree is
 //!   returned whole, which is conservative).
 
@@ -281,6 +282,14 @@ pub fn pvs_with_stats(
         return all(out, st);
     }
 
+    // `out` first serves as a bitmap of the culled objects (one bit per object, in u32 words),
+    // then holds the visible ids after it; the bitmap is drained at the end. No other memory,
+    // and no sort: ids come out ascending from the bitmap.
+    let n = tree.len;
+    let words = n.div_ceil(32);
+    out.resize(words, 0);
+    let mut cull = |out: &mut Vec<u32>, id: u32| out[(id >> 5) as usize] |= 1 << (id & 31);
+
     let mut stack = [(0u32, 0u16); STACK];
     let mut sp = 0;
     if !tree.nodes.is_empty() {
@@ -295,18 +304,20 @@ pub fn pvs_with_stats(
         st.nodes_tested += 1;
         let Some(mask) = test(&prepared, &view, mask, &node.bounds) else {
             st.subtrees_culled += 1;
+            for &id in &tree.ids[range] {
+                cull(out, id);
+            }
             continue;
         };
         if mask == 0 || (node.left != LEAF && sp + 2 > STACK) {
             st.subtrees_kept += 1;
-            out.extend_from_slice(&tree.ids[range]);
             continue;
         }
         if node.left == LEAF {
             for k in range {
                 st.boxes_tested += 1;
-                if test(&prepared, &view, mask, &tree.boxes[k]).is_some() {
-                    out.push(tree.ids[k]);
+                if test(&prepared, &view, mask, &tree.boxes[k]).is_none() {
+                    cull(out, tree.ids[k]);
                 }
             }
             continue;
@@ -315,8 +326,18 @@ pub fn pvs_with_stats(
         stack[sp + 1] = (node.left, mask);
         sp += 2;
     }
-    out.extend_from_slice(&tree.invalid);
-    out.sort_unstable();
+    for w in 0..words {
+        let mut visible = !out[w];
+        if w == words - 1 && n % 32 != 0 {
+            visible &= (1u32 << (n % 32)) - 1;
+        }
+        while visible != 0 {
+            let b = visible.trailing_zeros();
+            visible &= visible - 1;
+            out.push((w as u32) << 5 | b);
+        }
+    }
+    out.drain(..words);
     st.visible = out.len();
     st
 }

@@ -1,0 +1,79 @@
+//! The bake on Lyon (100 m cells, default options): ms per cell (median and p95) and the
+//! whole-scene time at 1 and 2 threads, with the speed-up and the store's size.
+//! `make bench` runs it (`cargo bench --bench bake`); it prints a table.
+//!
+//! Per-cell times are wall-clock times of `Plan::bake_cell`, measured while the pool runs at the
+//! given thread count (so at 2 threads they include the contention of two busy cores). A
+//! distribution's p95 is the figure asked for, which criterion's summary does not give; the
+//! µs-scale culler is measured with criterion (`benches/culler.rs`).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use vocc::bake::pipeline::{bake_cells, records, BakeParams, Plan, Record};
+use vocc::runtime::format::{encode_store, CellRecord};
+use vocc::scene::{self, ReadOptions};
+
+fn pct(v: &[f64], p: f64) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v.get(((v.len().max(1) - 1) as f64 * p).round() as usize)
+        .copied()
+        .unwrap_or(f64::NAN)
+}
+
+fn main() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let s = scene::load(
+        &[root.join("data/lyon1/buildings_lyon1.geojson")],
+        &ReadOptions {
+            height_attr: Some("HAUTEUR".into()),
+            ..ReadOptions::default()
+        },
+    )
+    .expect("Lyon loads");
+    let plan = Plan::new(&s, BakeParams::default()).unwrap();
+    let cells = plan.cells();
+    println!(
+        "Lyon, {} cells of 100 m, {} blockers, {} objects",
+        cells.len(),
+        s.blockers.len(),
+        s.objects.len()
+    );
+    println!("| threads | ms/cell median | ms/cell p95 | whole bake s | speed-up | VOs/cell | bytes/cell |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut base = None;
+    let mut first: Option<Vec<u8>> = None;
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let t = Instant::now();
+        let baked = pool.install(|| bake_cells(&plan, &cells, &|_| {}));
+        let secs = t.elapsed().as_secs_f64();
+        let ms: Vec<f64> = baked.iter().map(|c| c.stats.ms).collect();
+        let recs: Vec<CellRecord> = records(&plan.frame, &baked)
+            .iter()
+            .map(|r| match r {
+                Record::Skipped => CellRecord::Skipped,
+                Record::Vos { ground, vos } => CellRecord::new(*ground, vos).unwrap(),
+            })
+            .collect();
+        let bytes = encode_store(&plan.frame, &recs).unwrap();
+        let vos: usize = recs.iter().map(|r| r.vos().len()).sum();
+        let b = *base.get_or_insert(secs);
+        println!(
+            "| {threads} | {:.1} | {:.1} | {secs:.2} | {:.2}x | {:.2} | {:.1} |",
+            pct(&ms, 0.5),
+            pct(&ms, 0.95),
+            b / secs,
+            vos as f64 / recs.len() as f64,
+            bytes.len() as f64 / recs.len() as f64
+        );
+        match &first {
+            None => first = Some(bytes),
+            Some(f) => assert!(f == &bytes, "the store depends on the thread count"),
+        }
+    }
+}

@@ -1,0 +1,126 @@
+//! The runtime culler: µs per cell entry (decode the cell's record, then build its PVS over
+//! every object box), on Lyon (2,576 objects) and on a generated city of 100,000 buildings.
+//! `make bench` runs it (`cargo bench --bench culler`, criterion).
+//!
+//! Setup (not timed): load the scene, bake the store (Lyon: every 100 m cell; the generated
+//! city: the 5 x 5 cells around its centre, since the culler's cost depends on the number of
+//! objects, not of baked cells), build the box hierarchy once. Each timed iteration enters the
+//! next cell of the list, round robin.
+
+use std::path::PathBuf;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use vocc::bake::pipeline::{bake_cells, records, BakeParams, Plan, Record};
+use vocc::runtime::culler::{pvs, BoxTree};
+use vocc::runtime::format::{encode_store, CellRecord, Store};
+use vocc::scene::{self, ReadOptions, Scene};
+
+fn store_of(s: &Scene, region: Option<[f64; 4]>) -> Vec<u8> {
+    let plan = Plan::new(
+        s,
+        BakeParams {
+            region,
+            ..BakeParams::default()
+        },
+    )
+    .unwrap();
+    let baked = bake_cells(&plan, &plan.cells(), &|_| {});
+    let recs: Vec<CellRecord> = records(&plan.frame, &baked)
+        .iter()
+        .map(|r| match r {
+            Record::Skipped => CellRecord::Skipped,
+            Record::Vos { ground, vos } => CellRecord::new(*ground, vos).unwrap(),
+        })
+        .collect();
+    encode_store(&plan.frame, &recs).unwrap()
+}
+
+fn boxes(s: &Scene) -> Vec<[f64; 6]> {
+    s.objects
+        .iter()
+        .map(|o| {
+            let (a, b) = (o.bbox.min, o.bbox.max);
+            [a.x, a.y, a.z, b.x, b.y, b.z]
+        })
+        .collect()
+}
+
+fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, region: Option<[f64; 4]>) {
+    let bytes = store_of(s, region);
+    let store = Store::parse(&bytes).unwrap();
+    // The scene's local frame is the store's: both come from the same load.
+    let tree = BoxTree::new(&boxes(s));
+    let cells: Vec<u32> = (0..store.cell_count())
+        .filter(|&id| !store.cell(id).unwrap().vos().is_empty())
+        .collect();
+    let mut out = Vec::new();
+    let (mut culled, mut vos) = (0usize, 0usize);
+    for &id in &cells {
+        let rec = store.cell(id).unwrap();
+        pvs(store.frame(), id, &rec, &tree, &mut out);
+        culled += tree.len() - out.len();
+        vos += rec.vos().len();
+    }
+    eprintln!(
+        "{name}: {} objects, {} cells with VOs, {:.1} VOs and {:.1} objects culled per cell",
+        tree.len(),
+        cells.len(),
+        vos as f64 / cells.len().max(1) as f64,
+        culled as f64 / cells.len().max(1) as f64
+    );
+    let mut i = 0;
+    c.bench_function(&format!("culler/{name}/cell_entry"), |b| {
+        b.iter(|| {
+            let id = cells[i % cells.len()];
+            i += 1;
+            let rec = store.cell(id).unwrap();
+            pvs(store.frame(), id, &rec, &tree, &mut out);
+            out.len()
+        })
+    });
+}
+
+fn culler(c: &mut Criterion) {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let lyon = scene::load(
+        &[root.join("data/lyon1/buildings_lyon1.geojson")],
+        &ReadOptions {
+            height_attr: Some("HAUTEUR".into()),
+            ..ReadOptions::default()
+        },
+    )
+    .unwrap();
+    bench_scene(c, "lyon", &lyon, None);
+
+    let city = scene::gencity::generate(&scene::gencity::CityParams {
+        buildings: 100_000,
+        seed: 1,
+    });
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("city_100k.geojson");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+    scene::gencity::write_geojson(&mut w, &city).unwrap();
+    drop(w);
+    let s = scene::load(
+        &[path],
+        &ReadOptions {
+            height_attr: Some("height".into()),
+            ..ReadOptions::default()
+        },
+    )
+    .unwrap();
+    let e = s.extent();
+    let (cx, cy) = (0.5 * (e.min.x + e.max.x), 0.5 * (e.min.y + e.max.y));
+    bench_scene(
+        c,
+        "generated_100k",
+        &s,
+        Some([cx - 200.0, cy - 200.0, cx + 200.0, cy + 200.0]),
+    );
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(30);
+    targets = culler
+}
+criterion_main!(benches);
