@@ -3,22 +3,24 @@
 //! `make bench` runs it (`cargo bench --bench culler`, criterion).
 //!
 //! Setup (not timed): load the scene, bake the store (Lyon: every 100 m cell; the generated
-//! city: the 5 x 5 cells around its centre, since the culler's cost depends on the number of
-//! objects, not of baked cells), build the box hierarchy once. Each timed iteration enters the
+//! city: the 25 m cells of the 400 m square at its centre, since the culler's cost depends on
+//! the number of objects, not of baked cells; its detached buildings leave gaps that 100 m cells
+//! see through, so only smaller cells get VOs there), build the box hierarchy once. Each timed iteration enters the
 //! next cell of the list, round robin.
 
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use vocc::bake::pipeline::{bake_cells, records, BakeParams, Plan, Record};
-use vocc::runtime::culler::{pvs, BoxTree};
+use vocc::runtime::culler::{pvs, pvs_with_stats, BoxTree};
 use vocc::runtime::format::{encode_store, CellRecord, Store};
 use vocc::scene::{self, ReadOptions, Scene};
 
-fn store_of(s: &Scene, region: Option<[f64; 4]>) -> Vec<u8> {
+fn store_of(s: &Scene, cell_size: f64, region: Option<[f64; 4]>) -> Vec<u8> {
     let plan = Plan::new(
         s,
         BakeParams {
+            cell_size,
             region,
             ..BakeParams::default()
         },
@@ -45,8 +47,8 @@ fn boxes(s: &Scene) -> Vec<[f64; 6]> {
         .collect()
 }
 
-fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, region: Option<[f64; 4]>) {
-    let bytes = store_of(s, region);
+fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, cell_size: f64, region: Option<[f64; 4]>) {
+    let bytes = store_of(s, cell_size, region);
     let store = Store::parse(&bytes).unwrap();
     // The scene's local frame is the store's: both come from the same load.
     let tree = BoxTree::new(&boxes(s));
@@ -54,20 +56,25 @@ fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, region: Option<[f64; 4]
         .filter(|&id| !store.cell(id).unwrap().vos().is_empty())
         .collect();
     let mut out = Vec::new();
-    let (mut culled, mut vos) = (0usize, 0usize);
+    let (mut culled, mut vos, mut nodes, mut tested) = (0usize, 0usize, 0usize, 0usize);
     for &id in &cells {
         let rec = store.cell(id).unwrap();
-        pvs(store.frame(), id, &rec, &tree, &mut out);
+        let st = pvs_with_stats(store.frame(), id, &rec, &tree, &mut out);
+        nodes += st.nodes_tested;
+        tested += st.boxes_tested;
         culled += tree.len() - out.len();
         vos += rec.vos().len();
     }
     eprintln!(
-        "{name}: {} objects, {} cells with VOs, {:.1} VOs and {:.1} objects culled per cell",
+        "{name}: {} objects, {} cells with VOs; per cell {:.1} VOs, {:.1} objects culled, {:.0} nodes and {:.0} boxes tested",
         tree.len(),
         cells.len(),
         vos as f64 / cells.len().max(1) as f64,
-        culled as f64 / cells.len().max(1) as f64
+        culled as f64 / cells.len().max(1) as f64,
+        nodes as f64 / cells.len().max(1) as f64,
+        tested as f64 / cells.len().max(1) as f64
     );
+    assert!(!cells.is_empty(), "{name}: no cell got a VO");
     let mut i = 0;
     c.bench_function(&format!("culler/{name}/cell_entry"), |b| {
         b.iter(|| {
@@ -90,7 +97,7 @@ fn culler(c: &mut Criterion) {
         },
     )
     .unwrap();
-    bench_scene(c, "lyon", &lyon, None);
+    bench_scene(c, "lyon", &lyon, 100.0, None);
 
     let city = scene::gencity::generate(&scene::gencity::CityParams {
         buildings: 100_000,
@@ -114,6 +121,7 @@ fn culler(c: &mut Criterion) {
         c,
         "generated_100k",
         &s,
+        25.0,
         Some([cx - 200.0, cy - 200.0, cx + 200.0, cy + 200.0]),
     );
 }

@@ -32,7 +32,7 @@ use crate::runtime::grid::CellId;
 use crate::runtime::occlusion::{Cover, PreparedVo};
 
 /// Most boxes in a leaf.
-pub const LEAF_SIZE: usize = 8;
+pub const LEAF_SIZE: usize = 4;
 /// Depth of the traversal stack. A median split over `n` boxes is `ceil(log2(n / LEAF_SIZE))`
 /// deep, at most 30 for `u32` indices.
 const STACK: usize = 64;
@@ -42,6 +42,9 @@ const LEAF: u32 = u32::MAX;
 #[derive(Clone, Copy, Debug)]
 struct Node {
     bounds: [f64; 6],
+    /// The least top (`zmax`) of the boxes below: with the bounds, it lets a VO be dropped for
+    /// a subtree whose every box is too tall for it (see [`PreparedVo::cover_group`]).
+    min_top: f64,
     start: u32,
     end: u32,
     /// Children, or [`LEAF`].
@@ -58,8 +61,6 @@ pub struct BoxTree {
     ids: Vec<u32>,
     /// Their boxes, in the same order.
     boxes: Vec<[f64; 6]>,
-    /// Invalid boxes, ascending: always visible.
-    invalid: Vec<u32>,
     len: usize,
 }
 
@@ -85,18 +86,16 @@ impl BoxTree {
             "BoxTree: more than u32::MAX boxes"
         );
         let mut items: Vec<(u32, [f64; 6])> = Vec::with_capacity(boxes.len());
-        let mut invalid = Vec::new();
         for (i, b) in boxes.iter().enumerate() {
             if box_is_valid(b) {
                 items.push((i as u32, *b));
-            } else {
-                invalid.push(i as u32);
             }
         }
         let mut nodes: Vec<Node> = Vec::with_capacity(2 * items.len().div_ceil(LEAF_SIZE));
         if !items.is_empty() {
             let blank = Node {
                 bounds: [0.0; 6],
+                min_top: 0.0,
                 start: 0,
                 end: 0,
                 left: LEAF,
@@ -107,9 +106,11 @@ impl BoxTree {
             while let Some((ni, s, e)) = todo.pop() {
                 let part = &mut items[s..e];
                 let mut bounds = part[0].1;
+                let mut min_top = f64::INFINITY;
                 let mut cmin = [f64::INFINITY; 3];
                 let mut cmax = [f64::NEG_INFINITY; 3];
                 for (_, b) in part.iter() {
+                    min_top = min_top.min(b[5]);
                     for k in 0..3 {
                         bounds[k] = bounds[k].min(b[k]);
                         bounds[k + 3] = bounds[k + 3].max(b[k + 3]);
@@ -120,6 +121,7 @@ impl BoxTree {
                 }
                 let mut node = Node {
                     bounds,
+                    min_top,
                     start: s as u32,
                     end: e as u32,
                     ..blank
@@ -147,7 +149,6 @@ impl BoxTree {
             nodes,
             ids: items.iter().map(|&(i, _)| i).collect(),
             boxes: items.iter().map(|&(_, b)| b).collect(),
-            invalid,
             len: boxes.len(),
         }
     }
@@ -224,6 +225,7 @@ fn test(
     view: &crate::runtime::frame::CellView,
     mask: u16,
     bx: &[f64; 6],
+    min_top: f64,
 ) -> Option<u16> {
     let mut left = mask;
     let mut keep = mask;
@@ -231,7 +233,7 @@ fn test(
         let i = left.trailing_zeros() as usize;
         left &= left - 1;
         if let Some(Some(p)) = prepared.get(i) {
-            match p.cover(view, bx) {
+            match p.cover_group(view, bx, min_top) {
                 Cover::Hidden => return None,
                 Cover::Outside => keep &= !(1 << i),
                 Cover::Partial => {}
@@ -288,7 +290,7 @@ pub fn pvs_with_stats(
     let n = tree.len;
     let words = n.div_ceil(32);
     out.resize(words, 0);
-    let mut cull = |out: &mut Vec<u32>, id: u32| out[(id >> 5) as usize] |= 1 << (id & 31);
+    let cull = |out: &mut Vec<u32>, id: u32| out[(id >> 5) as usize] |= 1 << (id & 31);
 
     let mut stack = [(0u32, 0u16); STACK];
     let mut sp = 0;
@@ -302,7 +304,7 @@ pub fn pvs_with_stats(
         let node = &tree.nodes[ni as usize];
         let range = node.start as usize..node.end as usize;
         st.nodes_tested += 1;
-        let Some(mask) = test(&prepared, &view, mask, &node.bounds) else {
+        let Some(mask) = test(&prepared, &view, mask, &node.bounds, node.min_top) else {
             st.subtrees_culled += 1;
             for &id in &tree.ids[range] {
                 cull(out, id);
@@ -316,7 +318,7 @@ pub fn pvs_with_stats(
         if node.left == LEAF {
             for k in range {
                 st.boxes_tested += 1;
-                if test(&prepared, &view, mask, &tree.boxes[k]).is_none() {
+                if test(&prepared, &view, mask, &tree.boxes[k], tree.boxes[k][5]).is_none() {
                     cull(out, tree.ids[k]);
                 }
             }

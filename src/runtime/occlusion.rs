@@ -53,15 +53,27 @@ fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 /// A VO prepared for many box tests against one cell.
 #[derive(Clone, Copy, Debug)]
 pub struct PreparedVo {
-    /// Shrunk endpoints, oriented so that the cell lies left of `a -> b`.
-    a: [f64; 2],
-    b: [f64; 2],
     g: f64,
     h: f64,
     /// Greatest distance between the grown cell and the VO.
     d_far: f64,
     /// False when the VO's line meets the cell: its umbra is empty.
     usable: bool,
+    /// The umbra's binding half-planes as linear forms `f(p) = k[0] p.x + k[1] p.y + k[2]`,
+    /// `f > 0` inside: `-orient(a, b, p)`, `orient(c_a, a, p)` and `orient(c_b, p, b)` (the same
+    /// polynomials as the orientation tests, expanded). Of the constraints `orient(c, a, p) >= 0`
+    /// over the cell corners `c`, all pass through `a`, so their intersection is the cone at `a`
+    /// bounded by the most counter-clockwise direction `a - c`: that corner is `c_a`; likewise
+    /// `c_b` is the corner whose `b - c` is most clockwise. (Near-parallel candidates differ by
+    /// rounding only, far below [`MARGIN_M`].)
+    planes: [[f64; 3]; 3],
+}
+
+/// `orient(u, v, p)` as a linear form in `p`.
+fn linear(u: [f64; 2], v: [f64; 2]) -> [f64; 3] {
+    // (v - u) x (p - u) = (vx - ux)(py - uy) - (vy - uy)(px - ux)
+    let (dx, dy) = (v[0] - u[0], v[1] - u[1]);
+    [-dy, dx, dy * u[0] - dx * u[1]]
 }
 
 /// The grown cell's corners, counter-clockwise.
@@ -100,9 +112,22 @@ impl PreparedVo {
                 d_far = d_far.max(((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)).sqrt());
             }
         }
+        let cross = |u: [f64; 2], v: [f64; 2]| u[0] * v[1] - u[1] * v[0];
+        let away = |p: [f64; 2], c: [f64; 2]| [p[0] - c[0], p[1] - c[1]];
+        let (mut ca, mut cb) = (cs[0], cs[0]);
+        for &c in &cs[1..] {
+            if cross(away(a, ca), away(a, c)) > 0.0 {
+                ca = c;
+            }
+            if cross(away(b, cb), away(b, c)) < 0.0 {
+                cb = c;
+            }
+        }
+        let l = linear(a, b);
+        // orient(c, p, b) = orient(b, c, p).
+        let planes = [[-l[0], -l[1], -l[2]], linear(ca, a), linear(b, cb)];
         PreparedVo {
-            a,
-            b,
+            planes,
             g: vo.g,
             h: vo.h,
             d_far: d_far + MARGIN_M,
@@ -117,30 +142,20 @@ impl PreparedVo {
         }
         let m = MARGIN_M;
         let (x0, y0, x1, y1) = (bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m);
-        let pts = [[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
-        let cs = corners(view);
-        let (a, b) = (self.a, self.b);
-        // Each half-plane of the umbra: all corners in it (strictly) is needed for Hidden; all
-        // corners outside one of them (non-strictly) gives Outside.
+        // Over the box, each linear form is least and greatest at the corners its coefficients
+        // pick. All corners strictly in every half-plane is needed for Hidden; all corners
+        // outside one of them (non-strictly) gives Outside.
         let mut all_in = true;
-        let mut half_plane = |f: &dyn Fn([f64; 2]) -> f64| -> bool {
-            let mut any_in = false;
-            for &p in &pts {
-                let v = f(p);
-                if v > 0.0 {
-                    any_in = true;
-                } else {
-                    all_in = false;
-                }
-            }
-            !any_in
-        };
-        if half_plane(&|p| -orient(a, b, p)) {
-            return Cover::Outside;
-        }
-        for c in cs {
-            if half_plane(&|p| orient(c, a, p)) || half_plane(&|p| orient(c, p, b)) {
+        for k in &self.planes {
+            let (lo_x, hi_x) = if k[0] >= 0.0 { (x0, x1) } else { (x1, x0) };
+            let (lo_y, hi_y) = if k[1] >= 0.0 { (y0, y1) } else { (y1, y0) };
+            let max = k[0] * hi_x + k[1] * hi_y + k[2];
+            if !(max > 0.0) {
                 return Cover::Outside;
+            }
+            let min = k[0] * lo_x + k[1] * lo_y + k[2];
+            if !(min > 0.0) {
+                all_in = false;
             }
         }
         if !all_in {
@@ -160,6 +175,31 @@ impl PreparedVo {
         let ok = bx[2] >= self.g && view.e0 >= self.g && bx[5] + m <= top && self.h >= view.e1;
         if ok {
             Cover::Hidden
+        } else {
+            Cover::Partial
+        }
+    }
+}
+
+impl PreparedVo {
+    /// How this VO covers a group of boxes with bounds `bounds` whose least top is `min_top`:
+    /// [`Self::cover`] of the bounds, except that `Partial` becomes `Outside` when no box of the
+    /// group can meet rule 3's height bound. A box inside the bounds is at most `d_max` (the
+    /// greatest distance between the cell and the bounds' footprint) from the cell, so its
+    /// `D_near <= d_max` and its top bound is at most `e1 + (h - e1) max(1, d_max / D_far)`; a
+    /// group whose every top exceeds that has no box this VO hides.
+    pub fn cover_group(&self, view: &CellView, bounds: &[f64; 6], min_top: f64) -> Cover {
+        let c = self.cover(view, bounds);
+        if c != Cover::Partial {
+            return c;
+        }
+        let [cx0, cy0, cx1, cy1] = view.rect;
+        let dx = (bounds[3] - cx0).abs().max((cx1 - bounds[0]).abs());
+        let dy = (bounds[4] - cy0).abs().max((cy1 - bounds[1]).abs());
+        let d_max = (dx * dx + dy * dy).sqrt() + 2.0 * MARGIN_M;
+        let top_max = view.e1 + (self.h - view.e1).max(0.0) * (d_max / self.d_far).max(1.0);
+        if min_top > top_max + MARGIN_M {
+            Cover::Outside
         } else {
             Cover::Partial
         }
@@ -269,5 +309,106 @@ mod tests {
         ] {
             assert_eq!(p.cover(&v, &inner), Cover::Hidden);
         }
+    }
+
+    /// Rule 3 written out plainly: every grown corner strictly inside all nine umbra
+    /// half-planes (the beyond-line plane and both planes of each cell corner), then heights.
+    fn plain_hidden(v: &CellView, vo: &VoGeom, bx: &[f64; 6]) -> bool {
+        let m = MARGIN_M;
+        let d = [vo.b[0] - vo.a[0], vo.b[1] - vo.a[1]];
+        let len = d[0].hypot(d[1]);
+        let s = m / len;
+        let (mut a, mut b) = (
+            [vo.a[0] + d[0] * s, vo.a[1] + d[1] * s],
+            [vo.b[0] - d[0] * s, vo.b[1] - d[1] * s],
+        );
+        let cs = corners(v);
+        if cs.iter().all(|&c| orient(a, b, c) < 0.0) {
+            std::mem::swap(&mut a, &mut b);
+        } else if !cs.iter().all(|&c| orient(a, b, c) > 0.0) {
+            return false;
+        }
+        let (x0, y0, x1, y1) = (bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m);
+        for p in [[x0, y0], [x1, y0], [x1, y1], [x0, y1]] {
+            if !(orient(a, b, p) < 0.0) {
+                return false;
+            }
+            for c in cs {
+                if !(orient(c, a, p) > 0.0 && orient(c, p, b) > 0.0) {
+                    return false;
+                }
+            }
+        }
+        let [cx0, cy0, cx1, cy1] = v.rect;
+        let dx = (x0 - (cx1 + m)).max((cx0 - m) - x1).max(0.0);
+        let dy = (y0 - (cy1 + m)).max((cy0 - m) - y1).max(0.0);
+        let d_near = dx.hypot(dy);
+        let mut d_far: f64 = 0.0;
+        for c in cs {
+            for q in [vo.a, vo.b] {
+                d_far = d_far.max((c[0] - q[0]).hypot(c[1] - q[1]));
+            }
+        }
+        let top = v.e1 + (vo.h - v.e1) * (d_near / (d_far + m)).max(1.0);
+        d_near > 0.0 && bx[2] >= vo.g && bx[5] + m <= top && vo.h >= v.e1
+    }
+
+    #[test]
+    fn the_three_binding_planes_decide_as_all_nine_do() {
+        // A fixed linear congruential sequence: VOs around a 10 m cell, boxes around them.
+        let mut x: u64 = 12345;
+        let mut r = |lo: f64, hi: f64| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        let v = view();
+        let (mut hidden, mut outside) = (0, 0);
+        for _ in 0..4000 {
+            let vo = VoGeom {
+                a: [r(-60.0, 70.0), r(-60.0, 70.0)],
+                b: [r(-60.0, 70.0), r(-60.0, 70.0)],
+                g: 0.0,
+                h: r(2.0, 30.0),
+            };
+            let p = PreparedVo::new(&v, &vo);
+            for _ in 0..10 {
+                let (cx, cy, w, d) = (
+                    r(-150.0, 160.0),
+                    r(-150.0, 160.0),
+                    r(0.5, 30.0),
+                    r(0.5, 30.0),
+                );
+                let bx = [cx, cy, 0.0, cx + w, cy + d, r(0.5, 40.0)];
+                let c = p.cover(&v, &bx);
+                assert_eq!(
+                    c == Cover::Hidden,
+                    plain_hidden(&v, &vo, &bx),
+                    "{vo:?} {bx:?}"
+                );
+                hidden += (c == Cover::Hidden) as usize;
+                if c == Cover::Outside {
+                    outside += 1;
+                    // No sub-box is hidden.
+                    for k in 0..4 {
+                        let f = k as f64 / 4.0;
+                        let sub = [
+                            cx + f * w,
+                            cy + f * d,
+                            0.0,
+                            cx + f * w + 0.1,
+                            cy + f * d + 0.1,
+                            0.1,
+                        ];
+                        assert!(!plain_hidden(&v, &vo, &sub), "{vo:?} {sub:?}");
+                    }
+                }
+            }
+        }
+        assert!(
+            hidden > 100 && outside > 1000,
+            "{hidden} hidden, {outside} outside"
+        );
     }
 }
