@@ -352,6 +352,7 @@ impl<'s> Plan<'s> {
         let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
         let mut hidden: Vec<Vec<u32>> = Vec::new();
         let mut grower = CellGrower::new(&cell, &self.set, &self.params.grow);
+        let mut previous: Option<Vec<u32>> = None;
         for &k in &stats.levels {
             let ids: Vec<u32> = near
                 .iter()
@@ -359,7 +360,13 @@ impl<'s> Plan<'s> {
                 .filter(|(_, (h, _))| *h >= levels[k as usize])
                 .map(|(&i, _)| i)
                 .collect();
+            // The same blockers grow the same dense set (each VO's level comes from its chain,
+            // not from the slice).
+            if previous.as_ref() == Some(&ids) {
+                continue;
+            }
             let dense = grower.grow(&ids);
+            previous = Some(ids);
             for mut v in dense.vos {
                 // Only the part inside the quantization window (less a grid step) can be stored.
                 let (lo, hi) = window(f, centre);

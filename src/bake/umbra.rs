@@ -93,7 +93,7 @@ impl Default for GrowParams {
             search_m: 400.0,
             max_chain: 24,
             max_bridges: 2,
-            tries: 12,
+            tries: 6,
             min_vo_m: 1.0,
             verify: true,
         }
