@@ -285,3 +285,49 @@ fn bake_refuses_bad_options_and_pvs_bad_stores() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("not a valid vocc store"), "{err}");
 }
+
+#[test]
+fn bake_only_the_cells_of_a_walkable_area() {
+    let dir = common::temp_dir("cli-walkable");
+    let store = dir.join("w.vocc");
+    let out = vocc(&[
+        "bake",
+        LYON,
+        "--height-attr",
+        "HAUTEUR",
+        "--cells",
+        "tests/fixtures/scenes/lyon_walkable_street.geojson",
+        "-o",
+        store.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    // A 200 m x 40 m street strip meets three 100 m cells of one row.
+    assert!(err.contains("baked 3 cells"), "{err}");
+    let v: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", store.to_str().unwrap(), "--json"]).stdout)
+            .unwrap();
+    let empty = v["cells_by_vo_count"][0].as_u64().unwrap();
+    assert!(empty >= 225, "{v}");
+
+    // A walkable area must be polygons.
+    let bad = dir.join("bad.geojson");
+    std::fs::write(
+        &bad,
+        r#"{"type":"FeatureCollection","features":[{"type":"Feature","geometry":{"type":"Point","coordinates":[1,2]}}]}"#,
+    )
+    .unwrap();
+    let out = vocc(&[
+        "bake",
+        LYON,
+        "--height-attr",
+        "HAUTEUR",
+        "--cells",
+        bad.to_str().unwrap(),
+        "-o",
+        store.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("feature 0") && err.contains("Point"), "{err}");
+}

@@ -59,6 +59,8 @@ pub struct BakeParams {
     /// Bake only the cells meeting this local rectangle `[x0, y0, x1, y1]` (the grid still covers
     /// the whole scene).
     pub region: Option<[f64; 4]>,
+    /// Bake only the cells meeting this walkable area (outer rings, local frame).
+    pub walkable: Option<crate::scene::walkable::Area>,
     pub grow: GrowParams,
 }
 
@@ -70,6 +72,7 @@ impl Default for BakeParams {
             slices: Slices::Auto,
             max_vos: MAX_VOS_PER_CELL,
             region: None,
+            walkable: None,
             grow: GrowParams {
                 verify: false,
                 ..GrowParams::default()
@@ -233,12 +236,17 @@ impl<'s> Plan<'s> {
         })
     }
 
-    /// The cells to bake, ascending.
+    /// The cells to bake, ascending: those meeting the region and the walkable area, when
+    /// given (the others stay empty in the store: no VOs, so the culler keeps everything).
     pub fn cells(&self) -> Vec<CellId> {
         let g = &self.frame.grid;
         (0..g.cell_count() as u32)
             .filter(|&id| match (self.params.region, g.cell_rect(id)) {
                 (Some(r), Some(c)) => c[0] <= r[2] && c[2] >= r[0] && c[1] <= r[3] && c[3] >= r[1],
+                _ => true,
+            })
+            .filter(|&id| match (&self.params.walkable, g.cell_rect(id)) {
+                (Some(area), Some(c)) => crate::scene::walkable::rect_meets_area(c, area),
                 _ => true,
             })
             .collect()

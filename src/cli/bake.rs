@@ -44,6 +44,10 @@ pub struct BakeArgs {
     /// Bake only the cells meeting this world rectangle X0,Y0,X1,Y1 (the others stay empty).
     #[arg(long, value_parser = parse_rect, allow_hyphen_values = true, value_name = "X0,Y0,X1,Y1")]
     pub region: Option<[f64; 4]>,
+    /// Bake only the cells meeting the polygons of this GeoJSON (the walkable area, world
+    /// coordinates); the others stay empty.
+    #[arg(long, value_name = "GEOJSON")]
+    pub cells: Option<PathBuf>,
 }
 
 fn parse_range(s: &str) -> Result<(f64, f64), String> {
@@ -107,7 +111,12 @@ pub fn run(a: BakeArgs) -> Result<()> {
             y1 - s.origin.y,
         ]
     });
+    let walkable = match &a.cells {
+        Some(p) => Some(scene::walkable::read(p, s.origin)?),
+        None => None,
+    };
     let params = BakeParams {
+        walkable,
         cell_size: a.cell_size,
         eye: a.eye,
         slices: a.slices,

@@ -22,6 +22,7 @@ pub mod load;
 pub mod obj;
 pub mod solid;
 pub mod summary;
+pub mod walkable;
 
 use std::collections::BTreeMap;
 use std::fmt;
