@@ -15,9 +15,10 @@ test:
 	$(CARGO) test --locked --lib --no-default-features
 	$(CARGO) fmt --all -- --check
 
-# The main job on the bundled example.
+# The main job on the bundled example: bake Lyon into an occluder store, then describe it.
 demo:
-	$(CARGO) run --locked --release -- info $(DEMO_SCENE) --height-attr HAUTEUR
+	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/lyon.vocc
+	$(CARGO) run --locked --release -- inspect target/lyon.vocc
 
 bench:
 	$(CARGO) bench --locked
