@@ -12,7 +12,8 @@ fn load_broken(name: &str) -> LoadError {
         height_attr: Some("height".into()),
         ..ReadOptions::default()
     };
-    let err = scene::load(&[path.clone()], &opts).expect_err("broken input must not load");
+    let err =
+        scene::load(std::slice::from_ref(&path), &opts).expect_err("broken input must not load");
     assert_eq!(err.path, path, "the error names the file");
     assert!(
         err.to_string().contains(name),

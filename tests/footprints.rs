@@ -232,7 +232,7 @@ fn heights_fall_back_to_levels_and_missing_ones_are_reported() {
         storey_height: 3.5,
         ..ReadOptions::default()
     };
-    let s = scene::load(&[path.clone()], &opts).unwrap();
+    let s = scene::load(std::slice::from_ref(&path), &opts).unwrap();
     let tops: Vec<(String, f64)> = s
         .objects
         .iter()

@@ -84,7 +84,9 @@ pub fn quantize(
     while 2.0 * shift + 2.0 * q <= len && checks < MAX_CHECKS {
         let (pa, pb) = (a + dir * shift, b - dir * shift);
         let (ca, cb) = (around(pa, pa), around(pb, pb));
-        let mut pairs: Vec<(f64, (u16, u16), (u16, u16))> = Vec::new();
+        // (length in grid steps, grid point of a, grid point of b)
+        type Pair = (f64, (u16, u16), (u16, u16));
+        let mut pairs: Vec<Pair> = Vec::new();
         for &ka in &ca {
             for &kb in &cb {
                 if ka == kb {

@@ -96,8 +96,8 @@ fn repair_inner(
         if point_in_ring(&out[0], p) != Containment::Inside {
             return Err((hi, RingRejection::HoleOutside));
         }
-        for hj in 1..out.len() {
-            if hj != hi && point_in_ring(&out[hj], p) != Containment::Outside {
+        for (hj, ring) in out.iter().enumerate().skip(1) {
+            if hj != hi && point_in_ring(ring, p) != Containment::Outside {
                 return Err((hi, RingRejection::HoleOutside));
             }
         }
