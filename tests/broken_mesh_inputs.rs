@@ -12,7 +12,7 @@ fn fail(name: &str) -> LoadError {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures/broken")
         .join(name);
-    let e = load(&[p.clone()], &ReadOptions::default()).unwrap_err();
+    let e = load(std::slice::from_ref(&p), &ReadOptions::default()).unwrap_err();
     assert_eq!(e.path, p);
     e
 }
