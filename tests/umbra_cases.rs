@@ -168,10 +168,10 @@ fn paper_fig5_merge_that_shadow_volumes_miss() {
     let blockers = vec![a.clone(), b.clone()];
     // B has no point in A's umbra, and A none in B's (checked with the oracle, A or B alone).
     for p in &b {
-        assert!(!brute_hidden(&cell(), &[a.clone()], *p, 400));
+        assert!(!brute_hidden(&cell(), std::slice::from_ref(&a), *p, 400));
     }
     for p in &a {
-        assert!(!brute_hidden(&cell(), &[b.clone()], *p, 400));
+        assert!(!brute_hidden(&cell(), std::slice::from_ref(&b), *p, 400));
     }
     let out = run_all("fig5_no_shadow_merge", &cell(), &blockers);
     assert!(out.vos.iter().any(|v| v.chain.len() == 2));
