@@ -25,6 +25,9 @@ pub struct BlockerSet {
     pub polys: Vec<Vec<DVec2>>,
     /// Height of the wall that stands above the slice's base, per blocker, metres (for seeding).
     pub heights: Vec<f64>,
+    /// The object each blocker comes from (empty when unknown; then every blocker counts as its
+    /// own object).
+    pub objects: Vec<u32>,
     tree: RTree<GeomWithData<Rectangle<[f64; 2]>, u32>>,
 }
 
@@ -44,8 +47,22 @@ impl BlockerSet {
         BlockerSet {
             polys,
             heights,
+            objects: Vec::new(),
             tree: RTree::bulk_load(items),
         }
+    }
+
+    /// The same set, knowing which object each blocker comes from.
+    pub fn with_objects(mut self, objects: Vec<u32>) -> Self {
+        self.objects = objects;
+        self
+    }
+
+    /// Whether blockers `a` and `b` come from one object.
+    pub fn same_object(&self, a: u32, b: u32) -> bool {
+        a == b
+            || (!self.objects.is_empty()
+                && self.objects.get(a as usize) == self.objects.get(b as usize))
     }
 
     /// Blockers whose bounding box meets the axis-aligned box `[lo, hi]`.

@@ -125,6 +125,9 @@ pub struct CellStats {
     pub dropped: usize,
     /// Exact verifications run on dequantized VOs.
     pub checks: usize,
+    /// The stored VOs before quantization (the growth's segment at its chain's level), in the
+    /// same order: for measuring what quantization costs.
+    pub unquantized: Vec<crate::runtime::frame::VoGeom>,
     /// Occludee cost hidden by the stored VOs (rule 3, within the weighting radius).
     pub hidden_cost: u64,
     pub ms: f64,
@@ -224,7 +227,8 @@ impl<'s> Plan<'s> {
         let set = BlockerSet::new(
             scene.blockers.iter().map(|b| b.polygon.clone()).collect(),
             scene.blockers.iter().map(|b| b.top - b.base).collect(),
-        );
+        )
+        .with_objects(scene.blockers.iter().map(|b| b.object).collect());
         Ok(Plan {
             scene,
             frame,
@@ -441,7 +445,13 @@ impl<'s> Plan<'s> {
                         shrunk += 1;
                     }
                     let geom = f.dequantize(id, ground, &q)?;
-                    return Some((q, self.occludees.hidden(&view, &geom, radius)));
+                    let before = crate::runtime::frame::VoGeom {
+                        a: a.to_array(),
+                        b: b.to_array(),
+                        g,
+                        h: f.vo_top(e1, k),
+                    };
+                    return Some(((q, before), self.occludees.hidden(&view, &geom, radius)));
                 }
                 if r == Err(Refused::OutsideWindow) {
                     break;
@@ -464,6 +474,8 @@ impl<'s> Plan<'s> {
         stats.shrunk = shrunk;
         stats.dropped = dropped;
         stats.checks = all_checks;
+        let (vos, before): (Vec<QVo>, Vec<crate::runtime::frame::VoGeom>) = vos.into_iter().unzip();
+        stats.unquantized = before;
         let mut all: Vec<u32> = Vec::new();
         for q in &vos {
             if let Some(geom) = f.dequantize(id, ground, q) {

@@ -80,6 +80,9 @@ pub struct GrowParams {
     pub tries: usize,
     /// Shortest VO kept, metres.
     pub min_vo_m: f64,
+    /// No fusion: a chain holds the convex pieces of one object only (the single-building
+    /// baseline of the paper's Fig. 7).
+    pub single_object: bool,
     /// Pass every dense VO through the exact verifier before returning it (the gate). The bake
     /// turns it off: it verifies the few VOs it keeps after quantization instead, from their
     /// stored bytes, with rule 2's blockers.
@@ -95,6 +98,7 @@ impl Default for GrowParams {
             max_bridges: 2,
             tries: 6,
             min_vo_m: 1.0,
+            single_object: false,
             verify: true,
         }
     }
@@ -570,7 +574,12 @@ impl<'a> Grower<'a> {
                     .collect();
                 cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 cands.dedup_by_key(|c| c.1);
-                for &(_, id, case) in cands.iter().take(self.params.tries) {
+                let single = self.params.single_object;
+                for &(_, id, case) in cands
+                    .iter()
+                    .filter(|c| !single || self.set.same_object(c.1, seed))
+                    .take(self.params.tries)
+                {
                     if !tried.insert((left, end, id)) {
                         continue;
                     }
