@@ -21,6 +21,8 @@ pub mod runtime;
 #[cfg(feature = "bake")]
 pub mod bake;
 #[cfg(feature = "bake")]
+pub mod eval;
+#[cfg(feature = "bake")]
 pub mod geom;
 #[cfg(feature = "bake")]
 pub mod scene;
