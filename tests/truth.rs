@@ -210,10 +210,27 @@ fn a_mesh_box_hides_what_stands_behind_it() {
         + &obj_box("beside", (80.0, 0.0, 0.0), (90.0, 10.0, 5.0), 17);
     let s = load_text("truth-mesh", "boxes.obj", &text);
     assert_eq!(s.objects.len(), 3);
+    // Sampled points lie on the boxes' faces, spread over all six.
+    let c = Caster::new(&s);
+    let mut r = SplitMix(9);
+    let b = s.objects[1].bbox;
+    let mut faces = [0usize; 6];
+    for _ in 0..600 {
+        let q = c.sample_surface(1, &mut || r.f64()).unwrap();
+        let on: Vec<usize> = (0..6)
+            .filter(|&k| {
+                let v = if k < 3 { b.min[k] } else { b.max[k - 3] };
+                (q[k % 3] - v).abs() < 1e-9
+            })
+            .collect();
+        assert_eq!(on.len(), 1, "{q} on faces {on:?}");
+        faces[on[0]] += 1;
+    }
+    assert!(faces.iter().all(|&n| n > 10), "{faces:?}");
+    assert!((c.surface_area(1) - 2.0 * (100.0 + 100.0 + 100.0)).abs() < 1e-6);
     assert_eq!(vs_of(&s, CELL), vec![0, 2]);
     // Eyes inside the closed box are dropped (parity of an upward ray); high above, all three
     // are seen.
-    let c = Caster::new(&s);
     let inside = visible_set(
         &c,
         &s,
@@ -338,6 +355,52 @@ fn rays_reach_sampled_roof_points_from_above() {
         }
     }
     assert!(roofs > 100, "{roofs}");
+}
+
+/// Grid walk against brute force on real data, where buildings touch and meshes share faces:
+/// the first `t` must agree; the object may differ only on an exact tie.
+fn matches_brute_on(s: &Scene, rays: usize, seed: u64) {
+    let c = Caster::new(s);
+    let e = s.extent();
+    let mut r = SplitMix(seed);
+    let (mut hits, mut other) = (0, 0);
+    for k in 0..rays {
+        let o = DVec3::new(
+            e.min.x + (e.max.x - e.min.x) * r.f64(),
+            e.min.y + (e.max.y - e.min.y) * r.f64(),
+            e.min.z + (e.max.z - e.min.z) * r.f64() * 1.2,
+        );
+        let q = DVec3::new(
+            e.min.x + (e.max.x - e.min.x) * r.f64(),
+            e.min.y + (e.max.y - e.min.y) * r.f64(),
+            e.min.z + (e.max.z - e.min.z) * r.f64(),
+        );
+        let g = c.first_hit(o, q - o, 1.0);
+        let b = c.first_hit_brute(o, q - o, 1.0);
+        match (g, b) {
+            (None, None) => {}
+            (Some((og, tg)), Some((ob, tb))) => {
+                assert!(
+                    (tg - tb).abs() <= 1e-9 * tg.max(tb),
+                    "ray {k}: {g:?} vs {b:?}"
+                );
+                hits += 1;
+                other += (og != ob) as usize;
+            }
+            _ => panic!("ray {k}: grid {g:?}, brute {b:?}"),
+        }
+    }
+    assert!(hits > rays / 10, "{hits} of {rays}");
+    assert!(other * 100 <= hits, "{other} ties of {hits}");
+}
+
+#[test]
+fn the_grid_walk_matches_brute_force_on_real_meshes_and_footprints() {
+    let opts = ReadOptions::default();
+    let delft = scene::load(&[common::repo("data/delft/delft_buildings.obj")], &opts).unwrap();
+    matches_brute_on(&delft, 2000, 1);
+    let lyon = common::load_lyon();
+    matches_brute_on(&lyon, 500, 2);
 }
 
 /// The Lyon cell around world (1842000, 5176050): a 100 m square, local frame.

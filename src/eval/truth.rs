@@ -30,7 +30,9 @@ pub const EYE_TRIES: usize = 8;
 /// How densely to sample.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TruthParams {
-    /// Eye points per cell, uniform in the cell rectangle and the eye height range.
+    /// Eye points per cell: spread over the cell rectangle by a randomly shifted R2
+    /// low-discrepancy sequence (so any prefix covers the cell evenly), height uniform in the eye
+    /// range. An eye inside an object is drawn again, uniformly, up to [`EYE_TRIES`] times.
     pub eyes: usize,
     /// Rays per eye and object, aimed at area-uniform points of the object's surface.
     pub samples_per_object: usize,
@@ -94,8 +96,9 @@ fn targets(scene: &Scene, cell: [f64; 4], radius: Option<f64>) -> Vec<u32> {
         .collect()
 }
 
-/// The first object each ray hits, from eye `e` of the cell, over `samples` samples per target.
-/// Returns the sorted, deduplicated hits and the number of rays cast.
+/// The first object each ray hits from one eye of the cell, over `samples` samples per target.
+/// The eye stands at `first` (fractions of the cell's sides), or, if that is inside an object, at
+/// a point drawn from `eye_seed`. Returns the sorted, deduplicated hits and the number of rays.
 fn eye_hits(
     caster: &Caster,
     cell: [f64; 4],
@@ -103,13 +106,19 @@ fn eye_hits(
     targets: &[u32],
     samples: usize,
     eye_seed: u64,
+    first: (f64, f64),
 ) -> (Vec<u32>, u64) {
     let mut rng = Rng(eye_seed);
     let mut eye = None;
-    for _ in 0..EYE_TRIES {
+    for k in 0..EYE_TRIES {
+        let (u, v) = if k == 0 {
+            first
+        } else {
+            (rng.f64(), rng.f64())
+        };
         let p = DVec3::new(
-            cell[0] + (cell[2] - cell[0]) * rng.f64(),
-            cell[1] + (cell[3] - cell[1]) * rng.f64(),
+            cell[0] + (cell[2] - cell[0]) * u,
+            cell[1] + (cell[3] - cell[1]) * v,
             eye_z.0 + (eye_z.1 - eye_z.0) * rng.f64(),
         );
         if caster.contains(p).is_none() {
@@ -157,6 +166,15 @@ fn eye_seed(seed: u64, cell: [f64; 4], eye_z: (f64, f64), i: usize) -> u64 {
     mix(h ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15))
 }
 
+/// Point `i` of the R2 low-discrepancy sequence (Roberts' generalized golden ratio) in the unit
+/// square, shifted by `shift` (mod 1): any prefix of it covers the square evenly.
+fn r2(shift: (f64, f64), i: usize) -> (f64, f64) {
+    const G: f64 = 1.324_717_957_244_746;
+    let (a1, a2) = (1.0 / G, 1.0 / (G * G));
+    let k = i as f64 + 1.0;
+    ((shift.0 + a1 * k).fract(), (shift.1 + a2 * k).fract())
+}
+
 /// [`visible_set`] with the number of rays cast.
 pub fn visible_set_counted(
     caster: &Caster,
@@ -166,6 +184,8 @@ pub fn visible_set_counted(
     p: &TruthParams,
 ) -> (Vec<u32>, u64) {
     let targets = targets(scene, cell, p.radius);
+    let mut sr = Rng(eye_seed(p.seed, cell, eye_z, usize::MAX));
+    let shift = (sr.f64(), sr.f64());
     let per_eye: Vec<(Vec<u32>, u64)> = (0..p.eyes)
         .into_par_iter()
         .map(|i| {
@@ -176,6 +196,7 @@ pub fn visible_set_counted(
                 &targets,
                 p.samples_per_object,
                 eye_seed(p.seed, cell, eye_z, i),
+                r2(shift, i),
             )
         })
         .collect();
@@ -190,7 +211,9 @@ pub fn visible_set_counted(
 
 /// The visible set of a cell: ascending indices of the objects hit first by some ray from some
 /// eye. `cell` is `[x0, y0, x1, y1]` and `eye_z` `(lo, hi)`, local frame. Eyes that land inside
-/// an object are drawn again (up to [`EYE_TRIES`] times, then that eye is dropped).
+/// an object are drawn again (up to [`EYE_TRIES`] times, then that eye is dropped). A ray whose
+/// first hit is within [`REACH_TOLERANCE`] of its target point, or that meets nothing (rounding
+/// at a grazing target), counts as reaching the target.
 pub fn visible_set(
     caster: &Caster,
     scene: &Scene,
