@@ -24,8 +24,11 @@ fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<(f64, f64)> {
     vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)]
 }
 
-/// A GeoJSON FeatureCollection: per feature its rings (offsets from `W`) and height.
-fn geojson(features: &[(Vec<Vec<(f64, f64)>>, f64)]) -> String {
+/// A feature: its rings (offsets from `W`) and height.
+type Feature = (Vec<Vec<(f64, f64)>>, f64);
+
+/// A GeoJSON FeatureCollection of one Polygon per feature.
+fn geojson(features: &[Feature]) -> String {
     let f: Vec<String> = features
         .iter()
         .enumerate()
