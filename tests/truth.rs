@@ -526,7 +526,7 @@ fn lyon_convergence_report() {
                 cell,
                 EYES,
                 &base,
-                &[1, 2, 4, 8, 16, 32, 64],
+                &[1, 4, 16, 64, 256],
                 &[1, 2, 4, 8],
             )
         });
