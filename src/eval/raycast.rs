@@ -34,7 +34,8 @@ const MAX_CELLS: f64 = 4.0e6;
 /// Tries of rejection sampling in a cap or face before falling back to a boundary point.
 const SAMPLE_TRIES: usize = 64;
 
-/// An axis-aligned box, padded so that rays on a face are not lost.
+/// An axis-aligned box; the ones the caster keeps are padded (a hair wider than the geometry),
+/// so that the box tests never cut a hit on the box's faces.
 #[derive(Clone, Copy, Debug)]
 struct Bounds {
     min: DVec3,
@@ -319,10 +320,13 @@ impl Caster {
                 hi,
             });
             self.items.push(Item::Prism(pi));
-            self.item_box.push(Bounds {
-                min: lo.extend(base),
-                max: hi.extend(top),
-            });
+            self.item_box.push(
+                Bounds {
+                    min: lo.extend(base),
+                    max: hi.extend(top),
+                }
+                .padded(),
+            );
             if h > 0.0 {
                 for k in e0..e1 {
                     let [a, b] = self.edges[k];
@@ -405,7 +409,7 @@ impl Caster {
                 hi,
             });
             self.items.push(Item::Face(fi));
-            self.item_box.push(bx);
+            self.item_box.push(bx.padded());
             // True area from the projected one: |n| / |n_axis|.
             let area = area2d.max(0.0) * nrm.length() / nrm[axis].abs();
             if area > 0.0 && area.is_finite() {
