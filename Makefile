@@ -3,7 +3,7 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test demo bench lint fresh-clone pictures
+.PHONY: build test demo bench eval lint fresh-clone pictures
 
 build:
 	$(CARGO) build --release
@@ -22,6 +22,10 @@ demo:
 
 bench:
 	$(CARGO) bench --locked
+
+# Regenerates docs/RESULTS.md and docs/img/*.svg from the bundled data (several minutes).
+eval:
+	$(CARGO) run --locked --release -- results -o docs/RESULTS.md
 
 lint:
 	$(CARGO) clippy --all-targets -- -D warnings

@@ -33,6 +33,9 @@ use crate::scene::Scene;
 pub const GROUND_STEP_M: f64 = 0.25;
 /// Blockers within this distance of a cell decide its ground, metres.
 pub const GROUND_RADIUS_M: f64 = 50.0;
+/// The cell's ground is this percentile of the bases of the blockers near it, so that most of
+/// them stand on or below it (rule 2 needs a blocker's base at or below the VO's bottom).
+pub const GROUND_QUANTILE_PCT: usize = 90;
 /// VO top of level k above the eyes: `H0_M * (H_RATIO^k - 1)`.
 pub const H0_M: f64 = 2.0;
 pub const H_RATIO: f64 = 1.25;
@@ -267,8 +270,8 @@ impl<'s> Plan<'s> {
         ]
     }
 
-    /// The ground level of a cell: the median base of the blockers within
-    /// [`GROUND_RADIUS_M`], rounded to the nearest level; level 0 on flat ground.
+    /// The ground level of a cell: the [`GROUND_QUANTILE_PCT`] percentile of the bases of the
+    /// blockers within [`GROUND_RADIUS_M`], rounded up to a level; level 0 on flat ground.
     pub fn ground_level(&self, id: CellId) -> u8 {
         let f = &self.frame;
         if !f.per_cell_ground() {
@@ -285,17 +288,19 @@ impl<'s> Plan<'s> {
             return 0;
         }
         bases.sort_by(f64::total_cmp);
-        let m = bases[bases.len() / 2];
-        ((m - f.ground_z0) / f.ground_step)
-            .round()
-            .clamp(0.0, 255.0) as u8
+        let m = bases[(bases.len() - 1) * GROUND_QUANTILE_PCT / 100];
+        ((m - f.ground_z0) / f.ground_step).ceil().clamp(0.0, 255.0) as u8
     }
 
     /// Bakes one cell.
     pub fn bake_cell(&self, id: CellId) -> CellBake {
         let t0 = Instant::now();
         let mut stats = CellStats::default();
-        let record = self.bake_record(id, &mut stats);
+        let record = match self.bake_record(id, &mut stats) {
+            // A cell without VOs stores no ground byte: its ground is 0 in the record.
+            Record::Vos { vos, .. } if vos.is_empty() => Record::Vos { ground: 0, vos },
+            r => r,
+        };
         stats.ms = t0.elapsed().as_secs_f64() * 1e3;
         CellBake { id, record, stats }
     }

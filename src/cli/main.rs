@@ -13,6 +13,7 @@ use clap::{Args, Parser, Subcommand};
 use vocc::scene::{self, summary, ReadOptions};
 
 mod bake;
+mod eval;
 mod store;
 
 #[derive(Parser)]
@@ -84,30 +85,45 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Draw one cell as an SVG. With --debug: the 2D growth of one slice (blockers, seeds,
-    /// supporting and separating lines, the dense VOs).
+    /// Draw one cell as an SVG: `vocc render STORE SCENE... --cell ID -o cell.svg` draws the
+    /// cell, its VOs and the buildings, coloured visible, culled thanks to fusion, or culled by
+    /// single buildings alone (like the paper's Fig. 8). With --debug: `vocc render --debug
+    /// SCENE... --at X,Y` draws the 2D growth of one slice (blockers, seeds, supporting and
+    /// separating lines, the dense VOs).
     Render {
-        /// Draw the growth of one slice (the only mode until stores exist).
+        /// Draw the growth of one slice instead.
         #[arg(long)]
         debug: bool,
-        /// Scene files.
+        /// STORE then scene files; with --debug, scene files only.
         #[arg(required = true)]
-        scene: Vec<PathBuf>,
+        files: Vec<PathBuf>,
+        /// The cell, by id (store mode).
+        #[arg(long, value_name = "ID")]
+        cell: Option<u32>,
         /// A point of the cell, in world coordinates: X,Y.
         #[arg(long, value_name = "X,Y", value_parser = parse_xy, allow_hyphen_values = true)]
-        at: (f64, f64),
-        /// Side of the square cells, metres (grid anchored at the scene's minimum corner).
+        at: Option<(f64, f64)>,
+        /// --debug: side of the square cells, metres (grid anchored at the scene's minimum
+        /// corner).
         #[arg(long, default_value_t = 100.0, value_name = "M")]
         cell_size: f64,
-        /// Slice height in world metres (default: half the median building height).
+        /// --debug: slice height in world metres (default: half the median building height).
         #[arg(long, value_name = "Z")]
         slice: Option<f64>,
+        /// Store mode: metres shown around the cell's centre.
+        #[arg(long, default_value_t = 500.0, value_name = "M")]
+        radius: f64,
         #[command(flatten)]
         read: ReadArgs,
         /// Output SVG file.
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Evaluate a store against the ground truth: false culls (must be 0), PVS/VS, occlusion,
+    /// occlusion against the number of VOs, culler time. Exit status 2 on any false cull.
+    Eval(eval::EvalArgs),
+    /// Regenerate docs/RESULTS.md and its plots from the bundled data (what `make eval` runs).
+    Results(eval::ResultsArgs),
     /// Write a deterministic procedural city (GeoJSON footprints, attribute `height`).
     GenCity {
         /// Number of buildings.
@@ -217,17 +233,20 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Render {
             debug,
-            scene,
+            files,
+            cell,
             at,
             cell_size,
             slice,
+            radius,
             read,
             output,
         } => {
-            anyhow::ensure!(
-                debug,
-                "only `vocc render --debug` exists so far (the store comes with the bake)"
-            );
+            if !debug {
+                return store::render(files, &read, cell, at, radius, &output);
+            }
+            let at = at.context("--debug needs --at X,Y")?;
+            let scene = files;
             anyhow::ensure!(
                 cell_size.is_finite() && cell_size > 0.0,
                 "--cell-size must be a positive number of metres"
@@ -258,6 +277,8 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
+        Command::Eval(a) => eval::eval(a),
+        Command::Results(a) => eval::results(a),
         Command::GenCity {
             buildings,
             seed,

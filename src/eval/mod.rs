@@ -1,10 +1,17 @@
-//! Evaluation: the ground-truth visible set, independent of the occlusion pipeline.
+//! Evaluation: the ground-truth visible set, metrics, reports and pictures.
 //!
-//! Input: a loaded [`crate::scene::Scene`] (original geometry only).
-//! Output: [`raycast::Caster`], a ray caster over footprint prisms and mesh faces, and
-//! [`truth::visible_set`], the objects first hit by rays from sampled eye points of a cell.
-//! Invariant: nothing here reads blockers, virtual occluders, the verifier or the culler; the
-//! only shared code is the scene model and its readers.
+//! Input: a loaded [`crate::scene::Scene`] and, for the metrics, a store baked from it.
+//! Output: [`raycast::Caster`], a ray caster over footprint prisms and mesh faces;
+//! [`truth::visible_set`], the objects first hit by rays from sampled eye points of a cell;
+//! [`metrics`] (PVS against VS per cell), [`report`] (`vocc eval`, `docs/RESULTS.md`),
+//! [`plot`] and [`picture`] (SVG).
+//! Invariant: [`raycast`] and [`truth`] read no blockers, virtual occluders, verifier or culler;
+//! the only code they share with the pipeline is the scene model and its readers. The metrics
+//! build the PVS with the runtime culler, from the store's bytes, as an engine does.
 
+pub mod metrics;
+pub mod picture;
+pub mod plot;
 pub mod raycast;
+pub mod report;
 pub mod truth;

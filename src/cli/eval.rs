@@ -1,0 +1,202 @@
+//! `vocc eval` (a store against the ground truth) and `vocc results` (the suite behind
+//! `docs/RESULTS.md`, run by `make eval`).
+//!
+//! Input: a store and its scene; or dataset paths. Output: a report on stdout (text or JSON),
+//! Markdown and SVG files where asked. Exit status 2 when any false cull is found, so scripts
+//! and CI can rely on it.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use vocc::eval::metrics::{object_boxes, sample_cells, summarize};
+use vocc::eval::raycast::Caster;
+use vocc::eval::report::{
+    dataset_section, eval_cells, eval_markdown, machine, visible_sets, Dataset, SuiteParams,
+};
+use vocc::eval::truth::TruthParams;
+use vocc::runtime::culler::BoxTree;
+use vocc::scene::{self, ReadOptions};
+
+use crate::store::{parse, read_store};
+use crate::ReadArgs;
+
+/// Ground-truth sampling options.
+#[derive(Args, Clone)]
+pub struct TruthArgs {
+    /// Eye points per cell (spread over the cell, heights within the eye range).
+    #[arg(long, default_value_t = 64)]
+    pub eyes: usize,
+    /// Rays aimed at each object from each eye point, at points of its surface.
+    #[arg(long, default_value_t = 4)]
+    pub samples: usize,
+    /// Random seed (cells and rays).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl TruthArgs {
+    fn params(&self) -> TruthParams {
+        TruthParams {
+            eyes: self.eyes,
+            samples_per_object: self.samples,
+            radius: None,
+            seed: self.seed,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct EvalArgs {
+    /// Store file.
+    pub store: PathBuf,
+    /// The scene files the store was baked from (same files, same order).
+    #[arg(required = true)]
+    pub scene: Vec<PathBuf>,
+    #[command(flatten)]
+    pub read: ReadArgs,
+    /// Evaluate a seeded sample of N cells (default: every cell).
+    #[arg(long, value_name = "N")]
+    pub cells: Option<usize>,
+    #[command(flatten)]
+    pub truth: TruthArgs,
+    /// Print JSON (summary and per-cell figures).
+    #[arg(long)]
+    pub json: bool,
+    /// Write a Markdown report (and its plots) into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
+}
+
+pub fn eval(a: EvalArgs) -> Result<()> {
+    let bytes = read_store(&a.store)?;
+    let store = parse(&a.store, &bytes)?;
+    let s = scene::load(&a.scene, &a.read.options())?;
+    anyhow::ensure!(
+        store.frame().origin == s.origin.to_array(),
+        "the store's origin {:?} is not the scene's {:?}: give the files the store was baked from",
+        store.frame().origin,
+        s.origin.to_array()
+    );
+    let truth = a.truth.params();
+    let ids = sample_cells(&store, a.cells, a.truth.seed);
+    let caster = Caster::new(&s);
+    let tree = BoxTree::new(&object_boxes(&s));
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_message(format!("ground truth of {} cells", ids.len()));
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let vs = visible_sets(&s, &store, &caster, &ids, &truth);
+    bar.finish_and_clear();
+    let cells = eval_cells(&s, &store, &tree, &ids, &vs);
+    let sum = summarize(&s, &cells);
+    let mut out = std::io::stdout().lock();
+    if a.json {
+        serde_json::to_writer_pretty(
+            &mut out,
+            &serde_json::json!({"summary": sum, "cells": cells, "machine": machine()}),
+        )?;
+        writeln!(out)?;
+    } else {
+        writeln!(
+            out,
+            "{} cells, {} objects: {} false culls; PVS/VS median {:.2} (objects), {:.2} (triangles); {:.1}% of objects culled on average; culler {:.0} µs median",
+            sum.cells,
+            sum.objects,
+            sum.false_culls,
+            sum.median_ratio,
+            sum.median_ratio_triangles,
+            100.0 * sum.occluded_share,
+            sum.median_pvs_us
+        )?;
+        let by: Vec<String> = sum
+            .occluded_by_vos
+            .iter()
+            .enumerate()
+            .map(|(k, o)| format!("{k}: {:.1}%", 100.0 * o))
+            .collect();
+        writeln!(
+            out,
+            "objects culled with the first k VOs: {}",
+            by.join(", ")
+        )?;
+    }
+    if let Some(dir) = &a.report {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let cmd = std::env::args().collect::<Vec<_>>().join(" ");
+        let md = eval_markdown(
+            &format!("vocc eval: {}", a.store.display()),
+            &sum,
+            &cells,
+            &truth,
+            &cmd,
+        );
+        crate::write_atomically(&dir.join("eval.md"), |w| w.write_all(md.as_bytes()))?;
+        eprintln!("wrote {}", dir.join("eval.md").display());
+    }
+    if sum.false_culls > 0 {
+        eprintln!(
+            "error: {} false culls (visible objects the PVS misses)",
+            sum.false_culls
+        );
+        std::process::exit(2);
+    }
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct ResultsArgs {
+    /// The Markdown file to write; plots go into `img/` beside it.
+    #[arg(short, long, default_value = "docs/RESULTS.md")]
+    pub output: PathBuf,
+    /// Cells sampled for the sweeps.
+    #[arg(long, default_value_t = 40)]
+    pub sample: usize,
+    #[command(flatten)]
+    pub truth: TruthArgs,
+}
+
+pub fn results(a: ResultsArgs) -> Result<()> {
+    let img = a
+        .output
+        .parent()
+        .map(|p| p.join("img"))
+        .unwrap_or_else(|| PathBuf::from("img"));
+    let datasets = [
+        Dataset {
+            name: "Lyon".into(),
+            files: vec![PathBuf::from("data/lyon1/buildings_lyon1.geojson")],
+            read: ReadOptions {
+                height_attr: Some("HAUTEUR".into()),
+                ..ReadOptions::default()
+            },
+            flags: "--height-attr HAUTEUR".into(),
+        },
+        Dataset {
+            name: "Den Haag".into(),
+            files: vec![PathBuf::from("data/denhaag/DenHaag_01.json")],
+            read: ReadOptions::default(),
+            flags: String::new(),
+        },
+    ];
+    let params = SuiteParams {
+        truth: a.truth.params(),
+        sample: a.sample,
+        seed: a.truth.seed,
+    };
+    let mut md = String::from(
+        "# Results\n\nEvery figure here comes from `make eval` (`vocc results`), which bakes the bundled datasets, \
+         builds each cell's PVS with the runtime culler from the stored bytes, and compares it with the ground-truth \
+         visible set sampled by rays against the original geometry (`src/eval/truth.rs`, which never reads VOs). \
+         A false cull is an object of the visible set that the PVS misses; there must be none. \
+         Do not edit this file by hand.\n\n",
+    );
+    for d in &datasets {
+        let sec = dataset_section(d, &params, &img, &|m| eprintln!("{m}"))?;
+        md.push_str(&sec);
+    }
+    crate::write_atomically(&a.output, |w| w.write_all(md.as_bytes()))?;
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
+}

@@ -1,0 +1,243 @@
+//! Metrics: each sampled cell's PVS (from the store, as the runtime builds it) against its
+//! ground-truth visible set (from [`super::truth`], which never reads VOs).
+//!
+//! Input: a scene, a store's bytes for that scene, the ray caster and sampling parameters.
+//! Output: per cell, |VS|, |PVS| (objects and triangles), the false culls (objects of the VS
+//! missing from the PVS: must be none), the PVS build time, and the same PVS sizes with only the
+//! first k stored VOs (k = 1..10, the paper's Table 1); and a summary over cells.
+//! Invariants: the PVS comes from [`crate::runtime::culler::pvs`] on the decoded bytes, exactly
+//! what an engine computes; the VS comes from rays against the original geometry; the two share
+//! only the scene.
+
+use std::time::Instant;
+
+use crate::runtime::culler::{pvs, BoxTree};
+use crate::runtime::format::{CellRecord, Store};
+use crate::runtime::frame::MAX_VOS_PER_CELL;
+use crate::runtime::CellId;
+use crate::scene::Scene;
+
+use super::raycast::Caster;
+use super::truth::{visible_set, TruthParams};
+
+/// One evaluated cell.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CellEval {
+    pub cell: CellId,
+    pub vos: usize,
+    pub vs: usize,
+    pub pvs: usize,
+    pub vs_triangles: u64,
+    pub pvs_triangles: u64,
+    /// Objects of the VS that the PVS misses (ascending). Must be empty.
+    pub false_culls: Vec<u32>,
+    /// PVS build time, µs (one run, after a warm-up run).
+    pub pvs_us: f64,
+    /// |PVS| with only the first k stored VOs, k = 0..=10 (k = 0: every object).
+    pub pvs_by_vos: Vec<usize>,
+}
+
+impl CellEval {
+    /// |PVS| / |VS| in objects (1 when both are empty).
+    pub fn ratio(&self) -> f64 {
+        ratio(self.pvs as f64, self.vs as f64)
+    }
+
+    /// |PVS| / |VS| in triangles.
+    pub fn ratio_triangles(&self) -> f64 {
+        ratio(self.pvs_triangles as f64, self.vs_triangles as f64)
+    }
+}
+
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        a / b
+    } else if a > 0.0 {
+        f64::INFINITY
+    } else {
+        1.0
+    }
+}
+
+/// The object boxes of a scene, local frame, by object index.
+pub fn object_boxes(scene: &Scene) -> Vec<[f64; 6]> {
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            let (a, b) = (o.bbox.min, o.bbox.max);
+            [a.x, a.y, a.z, b.x, b.y, b.z]
+        })
+        .collect()
+}
+
+/// Cells to evaluate: every non-skipped cell of the grid, or a seeded sample of `n` of them
+/// (ascending).
+pub fn sample_cells(store: &Store, n: Option<usize>, seed: u64) -> Vec<CellId> {
+    let mut all: Vec<CellId> = (0..store.cell_count())
+        .filter(|&id| !matches!(store.cell(id), Ok(CellRecord::Skipped) | Err(_)))
+        .collect();
+    if let Some(n) = n {
+        // Partial Fisher–Yates with splitmix64: deterministic for a seed.
+        let mut state = seed ^ 0x9e37_79b9_7f4a_7c15;
+        let mut next = || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        };
+        let k = n.min(all.len());
+        for i in 0..k {
+            let j = i + (next() % (all.len() - i) as u64) as usize;
+            all.swap(i, j);
+        }
+        all.truncate(k);
+        all.sort_unstable();
+    }
+    all
+}
+
+/// A record with only its first `k` VOs.
+fn truncated(rec: &CellRecord, k: usize) -> CellRecord {
+    match rec {
+        CellRecord::Skipped => CellRecord::Skipped,
+        CellRecord::Vos { ground, vos } => {
+            CellRecord::new(*ground, &vos[..k.min(vos.len())]).unwrap_or(CellRecord::EMPTY)
+        }
+    }
+}
+
+/// The ground-truth visible set of a store's cell (its rectangle and eye heights).
+pub fn cell_vs(
+    scene: &Scene,
+    store: &Store,
+    caster: &Caster,
+    id: CellId,
+    truth: &TruthParams,
+) -> Vec<u32> {
+    let f = store.frame();
+    let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
+    let rect = f.grid.cell_rect(id).unwrap_or([0.0; 4]);
+    let view = f.cell_view(id, rec.ground());
+    let (e0, e1) = view.map(|v| (v.e0, v.e1)).unwrap_or((0.0, 0.0));
+    visible_set(caster, scene, rect, (e0, e1), truth)
+}
+
+/// Evaluates one cell against its visible set `vs` (ascending).
+pub fn eval_cell(scene: &Scene, store: &Store, tree: &BoxTree, id: CellId, vs: &[u32]) -> CellEval {
+    let f = store.frame();
+    let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
+    let mut out = Vec::new();
+    pvs(f, id, &rec, tree, &mut out);
+    let t = Instant::now();
+    pvs(f, id, &rec, tree, &mut out);
+    let pvs_us = t.elapsed().as_secs_f64() * 1e6;
+    let false_culls: Vec<u32> = vs
+        .iter()
+        .copied()
+        .filter(|i| out.binary_search(i).is_err())
+        .collect();
+    let tris = |ids: &[u32]| -> u64 {
+        ids.iter()
+            .map(|&i| scene.objects.get(i as usize).map_or(0, |o| o.cost))
+            .sum()
+    };
+    let mut by = Vec::with_capacity(MAX_VOS_PER_CELL + 1);
+    let mut tmp = Vec::new();
+    for k in 0..=MAX_VOS_PER_CELL {
+        pvs(f, id, &truncated(&rec, k), tree, &mut tmp);
+        by.push(tmp.len());
+    }
+    CellEval {
+        cell: id,
+        vos: rec.vos().len(),
+        vs: vs.len(),
+        pvs: out.len(),
+        vs_triangles: tris(vs),
+        pvs_triangles: tris(&out),
+        false_culls,
+        pvs_us,
+        pvs_by_vos: by,
+    }
+}
+
+/// The PVS of cell `view` from VO geometries (no quantization), by rule 3 box by box: for the
+/// quantization sweep.
+pub fn pvs_from_geoms(
+    view: &crate::runtime::CellView,
+    geoms: &[crate::runtime::VoGeom],
+    boxes: &[[f64; 6]],
+) -> Vec<u32> {
+    use crate::runtime::occlusion::{Cover, PreparedVo};
+    let prepared: Vec<PreparedVo> = geoms.iter().map(|g| PreparedVo::new(view, g)).collect();
+    (0..boxes.len() as u32)
+        .filter(|&i| {
+            !prepared
+                .iter()
+                .any(|p| p.cover(view, &boxes[i as usize]) == Cover::Hidden)
+        })
+        .collect()
+}
+
+/// A summary over cells.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Summary {
+    pub cells: usize,
+    pub objects: usize,
+    pub false_culls: usize,
+    pub median_ratio: f64,
+    pub median_ratio_triangles: f64,
+    pub mean_vs: f64,
+    pub mean_pvs: f64,
+    /// Mean share of the scene's objects culled.
+    pub occluded_share: f64,
+    /// Mean share of the scene's triangles culled.
+    pub occluded_share_triangles: f64,
+    pub median_pvs_us: f64,
+    pub p95_pvs_us: f64,
+    /// Mean occluded share with the first k VOs, k = 0..=10.
+    pub occluded_by_vos: Vec<f64>,
+    pub mean_vos: f64,
+}
+
+pub fn percentile(v: &[f64], p: f64) -> f64 {
+    let mut v: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * p).round() as usize]
+}
+
+pub fn summarize(scene: &Scene, cells: &[CellEval]) -> Summary {
+    let n = cells.len().max(1) as f64;
+    let objects = scene.objects.len();
+    let total_tris: u64 = scene.objects.iter().map(|o| o.cost).sum();
+    let mean = |f: &dyn Fn(&CellEval) -> f64| cells.iter().map(f).sum::<f64>() / n;
+    Summary {
+        cells: cells.len(),
+        objects,
+        false_culls: cells.iter().map(|c| c.false_culls.len()).sum(),
+        median_ratio: percentile(&cells.iter().map(|c| c.ratio()).collect::<Vec<_>>(), 0.5),
+        median_ratio_triangles: percentile(
+            &cells
+                .iter()
+                .map(|c| c.ratio_triangles())
+                .collect::<Vec<_>>(),
+            0.5,
+        ),
+        mean_vs: mean(&|c| c.vs as f64),
+        mean_pvs: mean(&|c| c.pvs as f64),
+        occluded_share: mean(&|c| 1.0 - c.pvs as f64 / objects.max(1) as f64),
+        occluded_share_triangles: mean(&|c| {
+            1.0 - c.pvs_triangles as f64 / total_tris.max(1) as f64
+        }),
+        median_pvs_us: percentile(&cells.iter().map(|c| c.pvs_us).collect::<Vec<_>>(), 0.5),
+        p95_pvs_us: percentile(&cells.iter().map(|c| c.pvs_us).collect::<Vec<_>>(), 0.95),
+        occluded_by_vos: (0..=MAX_VOS_PER_CELL)
+            .map(|k| mean(&|c| 1.0 - c.pvs_by_vos[k] as f64 / objects.max(1) as f64))
+            .collect(),
+        mean_vos: mean(&|c| c.vos as f64),
+    }
+}

@@ -1,0 +1,506 @@
+//! Reports: the evaluation of one store (`vocc eval`), and the results suite behind
+//! `docs/RESULTS.md` (`make eval`): per dataset, the default bake against the ground truth, the
+//! no-fusion baseline, sweeps over VOs per cell, slices, quantization and cell size, with plots.
+//!
+//! Input: scenes, bake parameters, sampling parameters. Output: Markdown and SVG files.
+//! Invariants: every figure in a report is computed by the run that writes it (never edited by
+//! hand); each table names the command and the machine; cells sampled with a fixed seed.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::bake::pipeline::{bake_cells, records, BakeParams, CellBake, Plan, Record, Slices};
+use crate::runtime::culler::BoxTree;
+use crate::runtime::format::{encode_store, CellRecord, Store};
+use crate::runtime::CellId;
+use crate::scene::{self, ReadOptions, Scene};
+
+use super::metrics::{
+    cell_vs, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
+    CellEval, Summary,
+};
+use super::plot::{cell_map, chart, Series};
+use super::raycast::Caster;
+use super::truth::TruthParams;
+
+/// A description of the machine: CPU model and core count.
+pub fn machine() -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{model}, {cores} cores")
+}
+
+/// A baked store and what baking it took.
+pub struct Baked {
+    pub bytes: Vec<u8>,
+    pub cells: Vec<CellBake>,
+    pub seconds: f64,
+}
+
+/// Bakes `cells` (all of the plan's when `None`) into a store.
+pub fn bake(scene: &Scene, params: BakeParams, cells: Option<&[CellId]>) -> Baked {
+    let plan = Plan::new(scene, params).expect("valid bake parameters");
+    let ids = cells.map_or_else(|| plan.cells(), |c| c.to_vec());
+    let t = Instant::now();
+    let baked = bake_cells(&plan, &ids, &|_| {});
+    let seconds = t.elapsed().as_secs_f64();
+    let recs: Vec<CellRecord> = records(&plan.frame, &baked)
+        .iter()
+        .map(|r| match r {
+            Record::Skipped => CellRecord::Skipped,
+            Record::Vos { ground, vos } => {
+                CellRecord::new(*ground, vos).unwrap_or(CellRecord::EMPTY)
+            }
+        })
+        .collect();
+    Baked {
+        bytes: encode_store(&plan.frame, &recs).expect("the bake's records encode"),
+        cells: baked,
+        seconds,
+    }
+}
+
+/// Per-cell bake times, ms: (median, p95).
+pub fn bake_ms(cells: &[CellBake]) -> (f64, f64) {
+    let ms: Vec<f64> = cells.iter().map(|c| c.stats.ms).collect();
+    (percentile(&ms, 0.5), percentile(&ms, 0.95))
+}
+
+/// Evaluates `ids` of a store given their visible sets.
+pub fn eval_cells(
+    scene: &Scene,
+    store: &Store,
+    tree: &BoxTree,
+    ids: &[CellId],
+    vs: &[Vec<u32>],
+) -> Vec<CellEval> {
+    ids.iter()
+        .zip(vs)
+        .map(|(&id, v)| eval_cell(scene, store, tree, id, v))
+        .collect()
+}
+
+/// Visible sets of `ids`, in parallel.
+pub fn visible_sets(
+    scene: &Scene,
+    store: &Store,
+    caster: &Caster,
+    ids: &[CellId],
+    truth: &TruthParams,
+) -> Vec<Vec<u32>> {
+    ids.par_iter()
+        .map(|&id| cell_vs(scene, store, caster, id, truth))
+        .collect()
+}
+
+/// One dataset of the suite.
+pub struct Dataset {
+    pub name: String,
+    pub files: Vec<PathBuf>,
+    pub read: ReadOptions,
+    /// The reader flags as a user types them, for the tables' commands.
+    pub flags: String,
+}
+
+/// Sampling of the suite.
+pub struct SuiteParams {
+    pub truth: TruthParams,
+    /// Cells sampled for the sweeps (the default bake is evaluated on every cell).
+    pub sample: usize,
+    pub seed: u64,
+}
+
+fn row(out: &mut String, label: &str, s: &Summary, extra: &str) {
+    let _ = writeln!(
+        out,
+        "| {label} | {} | {} | {:.2} | {:.2} | {:.1}% | {:.1}% | {:.1} | {:.1} |{extra}",
+        s.cells,
+        s.false_culls,
+        s.median_ratio,
+        s.median_ratio_triangles,
+        100.0 * s.occluded_share,
+        100.0 * s.occluded_share_triangles,
+        s.mean_vs,
+        s.mean_pvs,
+    );
+}
+
+const HEAD: &str = "| variant | cells | false culls | PVS/VS objects (median) | PVS/VS triangles (median) | objects culled (mean) | triangles culled (mean) | mean VS | mean PVS |";
+const RULE: &str = "|---|---|---|---|---|---|---|---|---|";
+
+/// Runs the suite on one dataset; writes plots into `img` and returns its Markdown section.
+pub fn dataset_section(
+    d: &Dataset,
+    p: &SuiteParams,
+    img: &Path,
+    progress: &dyn Fn(&str),
+) -> Result<String, scene::LoadError> {
+    let s = scene::load(&d.files, &d.read)?;
+    let caster = Caster::new(&s);
+    let tree = BoxTree::new(&object_boxes(&s));
+    let files: Vec<String> = d.files.iter().map(|f| f.display().to_string()).collect();
+    let cmd = format!("vocc bake {} {}", files.join(" "), d.flags);
+    let mut md = String::new();
+    let _ = writeln!(md, "## {}\n", d.name);
+    let _ = writeln!(
+        md,
+        "{} objects ({} triangles), {} blockers. Ground truth: {} eye points per cell, {} rays aimed at each object from each eye point{}; seed {}.\n",
+        s.objects.len(),
+        s.objects.iter().map(|o| o.cost).sum::<u64>(),
+        s.blockers.len(),
+        p.truth.eyes,
+        p.truth.samples_per_object,
+        p.truth.radius.map_or(String::new(), |r| format!(" (objects within {r} m of the cell)")),
+        p.truth.seed
+    );
+
+    // The default bake, every cell.
+    progress(&format!("{}: default bake", d.name));
+    let main = bake(&s, BakeParams::default(), None);
+    let store = Store::parse(&main.bytes).expect("valid store");
+    let all = sample_cells(&store, None, p.seed);
+    progress(&format!("{}: ground truth of {} cells", d.name, all.len()));
+    let t = Instant::now();
+    let vs_all = visible_sets(&s, &store, &caster, &all, &p.truth);
+    let truth_s = t.elapsed().as_secs_f64();
+    let ev = eval_cells(&s, &store, &tree, &all, &vs_all);
+    let sm = summarize(&s, &ev);
+    let (med, p95) = bake_ms(&main.cells);
+    let nbytes = main.bytes.len() as f64 / store.cell_count().max(1) as f64;
+
+    let _ = writeln!(md, "### Default bake, 100 m cells, every cell\n");
+    let _ = writeln!(
+        md,
+        "Command: `{cmd} -o store.vocc` then `vocc eval store.vocc {} {}`. Machine: {}.\n",
+        files.join(" "),
+        d.flags,
+        machine()
+    );
+    let _ = writeln!(md, "{HEAD}\n{RULE}");
+    row(&mut md, "vocc, 10 VOs", &sm, "");
+    let _ = writeln!(
+        md,
+        "\nStore: {:.1} bytes per cell ({} bytes, {:.2} VOs per cell). Bake: {:.1} ms per cell median, {:.1} ms p95, {:.1} s for the whole scene on {} threads. Culler: {:.0} µs median, {:.0} µs p95 per cell entry. Ground truth: {:.1} s.\n",
+        nbytes,
+        main.bytes.len(),
+        sm.mean_vos,
+        med,
+        p95,
+        main.seconds,
+        rayon::current_num_threads(),
+        sm.median_pvs_us,
+        sm.p95_pvs_us,
+        truth_s
+    );
+
+    // The sample for the sweeps.
+    let sample = sample_cells(&store, Some(p.sample), p.seed);
+    let pick = |ids: &[CellId]| -> Vec<Vec<u32>> {
+        ids.iter()
+            .map(|id| vs_all[all.binary_search(id).expect("sampled from all")].clone())
+            .collect()
+    };
+    let vs_sample = pick(&sample);
+
+    // Table 1: VOs per cell (prefixes of the stored order).
+    let _ = writeln!(
+        md,
+        "### Occlusion against the number of VOs (the paper's Table 1), every cell\n"
+    );
+    let _ = writeln!(md, "The first k stored VOs of each cell (the stored order is most effective first). Command as above.\n");
+    let _ = writeln!(md, "| VOs | objects culled (mean) |\n|---|---|");
+    for (k, o) in sm.occluded_by_vos.iter().enumerate() {
+        let _ = writeln!(md, "| {k} | {:.1}% |", 100.0 * o);
+    }
+    let _ = writeln!(md);
+    let vo_plot = chart(
+        &format!("{}: occlusion against VOs per cell", d.name),
+        "VOs per cell (first k stored)",
+        "objects culled, % (mean over cells)",
+        &[Series {
+            label: "vocc".into(),
+            points: sm
+                .occluded_by_vos
+                .iter()
+                .enumerate()
+                .map(|(k, o)| (k as f64, 100.0 * o))
+                .collect(),
+            line: true,
+        }],
+    );
+    let slug = d.name.to_lowercase().replace(' ', "_");
+    write_file(&img.join(format!("{slug}_vos.svg")), &vo_plot);
+    let _ = writeln!(md, "![occlusion against VOs](img/{slug}_vos.svg)\n");
+
+    // Baseline, quantization off, slices.
+    let _ = writeln!(
+        md,
+        "### Variants on a sample of {} cells (seed {})\n",
+        sample.len(),
+        p.seed
+    );
+    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings (chains never leave one object: no fusion); quantization off evaluates each stored VO's unquantized segment by rule 3. Machine: {}.\n", machine());
+    let _ = writeln!(md, "{HEAD} bake ms/cell (median) |\n{RULE}---|");
+    let mut speed: Vec<(String, f64, f64)> = Vec::new();
+    let sample_main: Vec<CellEval> = eval_cells(&s, &store, &tree, &sample, &vs_sample);
+    let main_sample_ms = bake_ms(
+        &main
+            .cells
+            .iter()
+            .filter(|c| sample.binary_search(&c.id).is_ok())
+            .cloned()
+            .collect::<Vec<_>>(),
+    );
+    let sm_main = summarize(&s, &sample_main);
+    row(
+        &mut md,
+        "vocc (auto slices, 10 VOs)",
+        &sm_main,
+        &format!(" {:.1} |", main_sample_ms.0),
+    );
+    speed.push(("auto slices".into(), main_sample_ms.0, sm_main.median_ratio));
+
+    progress(&format!("{}: no-fusion baseline", d.name));
+    let mut bp = BakeParams::default();
+    bp.grow.single_object = true;
+    let base = bake(&s, bp, Some(&sample));
+    let bstore = Store::parse(&base.bytes).expect("valid store");
+    let sb = summarize(&s, &eval_cells(&s, &bstore, &tree, &sample, &vs_sample));
+    row(
+        &mut md,
+        "single buildings, no fusion",
+        &sb,
+        &format!(" {:.1} |", bake_ms(&base.cells).0),
+    );
+
+    // Quantization off.
+    let boxes = object_boxes(&s);
+    let f = *store.frame();
+    let unq: Vec<CellEval> = sample
+        .iter()
+        .zip(&vs_sample)
+        .map(|(&id, vs)| {
+            let c = &main.cells[main
+                .cells
+                .binary_search_by_key(&id, |c| c.id)
+                .expect("baked")];
+            let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
+            let view = f.cell_view(id, rec.ground()).expect("in grid");
+            let pvs = pvs_from_geoms(&view, &c.stats.unquantized, &boxes);
+            let mut e = eval_cell(&s, &store, &tree, id, vs);
+            e.pvs = pvs.len();
+            e.pvs_triangles = pvs.iter().map(|&i| s.objects[i as usize].cost).sum();
+            e.false_culls = vs
+                .iter()
+                .copied()
+                .filter(|i| pvs.binary_search(i).is_err())
+                .collect();
+            e
+        })
+        .collect();
+    row(
+        &mut md,
+        "quantization off",
+        &summarize(&s, &unq),
+        &format!(" {:.1} |", main_sample_ms.0),
+    );
+
+    let mut slice_pts = Vec::new();
+    for n in 1..=5u8 {
+        progress(&format!("{}: {n} slices", d.name));
+        let v = bake(
+            &s,
+            BakeParams {
+                slices: Slices::Fixed(n),
+                ..BakeParams::default()
+            },
+            Some(&sample),
+        );
+        let st = Store::parse(&v.bytes).expect("valid store");
+        let sv = summarize(&s, &eval_cells(&s, &st, &tree, &sample, &vs_sample));
+        let ms = bake_ms(&v.cells).0;
+        row(
+            &mut md,
+            &format!("{n} slice{}", if n > 1 { "s" } else { "" }),
+            &sv,
+            &format!(" {ms:.1} |"),
+        );
+        slice_pts.push((n as f64, 100.0 * sv.occluded_share));
+        speed.push((format!("{n} slices"), ms, sv.median_ratio));
+    }
+    let _ = writeln!(md);
+
+    // Cell sizes.
+    let _ = writeln!(
+        md,
+        "### Cell size (sample of up to {} cells per size)\n",
+        p.sample
+    );
+    let _ = writeln!(
+        md,
+        "Command: the default bake with `--cell-size 50`, `100`, `200`. Machine: {}.\n",
+        machine()
+    );
+    let _ = writeln!(
+        md,
+        "{HEAD} bake ms/cell (median) | bytes/cell |\n{RULE}---|---|"
+    );
+    for size in [50.0, 100.0, 200.0] {
+        progress(&format!("{}: {size} m cells", d.name));
+        let params = BakeParams {
+            cell_size: size,
+            ..BakeParams::default()
+        };
+        let plan = Plan::new(&s, params.clone()).expect("valid");
+        // Sample over the grid of this size.
+        let empty: Vec<CellRecord> = vec![CellRecord::EMPTY; plan.frame.grid.cell_count() as usize];
+        let grid_bytes = encode_store(&plan.frame, &empty).expect("encodes");
+        let grid_store = Store::parse(&grid_bytes).expect("valid");
+        let ids = sample_cells(&grid_store, Some(p.sample), p.seed);
+        let v = bake(&s, params, Some(&ids));
+        let st = Store::parse(&v.bytes).expect("valid store");
+        let vs = if size == 100.0 {
+            pick(&ids)
+        } else {
+            visible_sets(&s, &st, &caster, &ids, &p.truth)
+        };
+        let sv = summarize(&s, &eval_cells(&s, &st, &tree, &ids, &vs));
+        let ms = bake_ms(&v.cells).0;
+        // Bytes per baked cell: index byte plus its record.
+        let bytes = v
+            .cells
+            .iter()
+            .map(|c| match &c.record {
+                Record::Vos { vos, .. } if !vos.is_empty() => 1.0 + 5.0 * vos.len() as f64,
+                _ => 1.0,
+            })
+            .sum::<f64>()
+            / v.cells.len().max(1) as f64;
+        row(
+            &mut md,
+            &format!("{size} m"),
+            &sv,
+            &format!(" {ms:.1} | {bytes:.1} |"),
+        );
+        speed.push((format!("{size} m cells"), ms, sv.median_ratio));
+    }
+    let _ = writeln!(md);
+
+    // Plots: speed against error; the cell map.
+    let speed_plot = chart(
+        &format!("{}: bake speed against tightness", d.name),
+        "bake ms per cell (median, sample)",
+        "PVS/VS (median, objects)",
+        &speed
+            .iter()
+            .map(|(l, ms, r)| Series {
+                label: l.clone(),
+                points: vec![(*ms, *r)],
+                line: false,
+            })
+            .collect::<Vec<_>>(),
+    );
+    write_file(&img.join(format!("{slug}_speed_error.svg")), &speed_plot);
+    let slices_plot = chart(
+        &format!("{}: occlusion against slices", d.name),
+        "slices",
+        "objects culled, % (mean, sample)",
+        &[Series {
+            label: "vocc".into(),
+            points: slice_pts,
+            line: true,
+        }],
+    );
+    write_file(&img.join(format!("{slug}_slices.svg")), &slices_plot);
+    let ratio_of = |id: CellId| {
+        all.binary_search(&id)
+            .ok()
+            .map(|k| ev[k].ratio())
+            .filter(|r| r.is_finite())
+    };
+    let g = store.frame().grid;
+    let map = cell_map(
+        &format!("{}: PVS/VS per 100 m cell", d.name),
+        g.nx,
+        g.ny,
+        &ratio_of,
+        1.0,
+        percentile(&ev.iter().map(|e| e.ratio()).collect::<Vec<_>>(), 0.95).max(1.5),
+        "PVS/VS",
+    );
+    write_file(&img.join(format!("{slug}_map.svg")), &map);
+    let _ = writeln!(md, "![speed against error](img/{slug}_speed_error.svg)\n\n![occlusion against slices](img/{slug}_slices.svg)\n\n![PVS/VS per cell](img/{slug}_map.svg)\n");
+    Ok(md)
+}
+
+fn write_file(path: &Path, text: &str) {
+    if let Some(d) = path.parent() {
+        let _ = std::fs::create_dir_all(d);
+    }
+    let _ = std::fs::write(path, text);
+}
+
+/// Markdown for `vocc eval`: the summary, the VO sweep and the worst cells.
+pub fn eval_markdown(
+    title: &str,
+    s: &Summary,
+    cells: &[CellEval],
+    truth: &TruthParams,
+    command: &str,
+) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "# {title}\n");
+    let _ = writeln!(md, "Command: `{command}`. Machine: {}. Ground truth: {} eye points per cell, {} rays aimed at each object per eye point, seed {}.\n", machine(), truth.eyes, truth.samples_per_object, truth.seed);
+    let _ = writeln!(md, "{HEAD}\n{RULE}");
+    row(&mut md, "store", s, "");
+    let _ = writeln!(
+        md,
+        "\nCuller: {:.0} µs median, {:.0} µs p95 per cell entry; {:.2} VOs per cell.\n",
+        s.median_pvs_us, s.p95_pvs_us, s.mean_vos
+    );
+    let _ = writeln!(md, "| VOs | objects culled (mean) |\n|---|---|");
+    for (k, o) in s.occluded_by_vos.iter().enumerate() {
+        let _ = writeln!(md, "| {k} | {:.1}% |", 100.0 * o);
+    }
+    let mut worst: Vec<&CellEval> = cells.iter().collect();
+    worst.sort_by(|a, b| b.ratio().total_cmp(&a.ratio()));
+    let _ = writeln!(
+        md,
+        "\nLoosest cells:\n\n| cell | VOs | VS | PVS | PVS/VS |\n|---|---|---|---|---|"
+    );
+    for c in worst.iter().take(10) {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {:.2} |",
+            c.cell,
+            c.vos,
+            c.vs,
+            c.pvs,
+            c.ratio()
+        );
+    }
+    if s.false_culls > 0 {
+        let _ = writeln!(
+            md,
+            "\n**FALSE CULLS: {}** (cells: {:?})",
+            s.false_culls,
+            cells
+                .iter()
+                .filter(|c| !c.false_culls.is_empty())
+                .map(|c| c.cell)
+                .collect::<Vec<_>>()
+        );
+    }
+    md
+}
