@@ -20,8 +20,9 @@ const L: f64 = 70.0;
 const R: f64 = 180.0;
 const T: f64 = 40.0;
 const B: f64 = 55.0;
-const COLOURS: [&str; 8] = [
-    "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+const COLOURS: [&str; 11] = [
+    "#000000", "#bcbd22", "#7f7f7f", "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
+    "#8c564b", "#e377c2", "#17becf",
 ];
 
 fn nice_range(lo: f64, hi: f64) -> (f64, f64) {

@@ -204,6 +204,33 @@ pub fn dataset_section(
         truth_s
     );
 
+    // How the visible set grows with the sampling, for the three cells of the sample's start.
+    let _ = writeln!(md, "### Ground-truth convergence\n");
+    let _ = writeln!(md, "|VS| of three cells as eye points and rays per object grow (the defaults above are 64 x 4). The set only grows with more samples, so it is a lower bound of the true visible set; every object of it must be in the PVS.\n");
+    let eyes = [4usize, 16, 64, 256];
+    let samples = [1usize, 4];
+    let mut head = String::from("| cell |");
+    for e in eyes {
+        for k in samples {
+            let _ = write!(head, " {e} x {k} |");
+        }
+    }
+    let _ = writeln!(
+        md,
+        "{head}\n|---|{}",
+        "---|".repeat(eyes.len() * samples.len())
+    );
+    for &id in sample_cells(&store, Some(3), p.seed + 1).iter() {
+        let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
+        let rect = store.frame().grid.cell_rect(id).unwrap_or([0.0; 4]);
+        let v = store.frame().cell_view(id, rec.ground()).expect("in grid");
+        let pts =
+            super::truth::convergence(&caster, &s, rect, (v.e0, v.e1), &p.truth, &eyes, &samples);
+        let cells: Vec<String> = pts.iter().map(|c| c.vs.to_string()).collect();
+        let _ = writeln!(md, "| {id} | {} |", cells.join(" | "));
+    }
+    let _ = writeln!(md);
+
     // The sample for the sweeps.
     let sample = sample_cells(&store, Some(p.sample), p.seed);
     let pick = |ids: &[CellId]| -> Vec<Vec<u32>> {
