@@ -269,9 +269,15 @@ impl<'a> Grower<'a> {
             // still lie in their blockers (convexity). It is the best join when the chords stay
             // valid.
             let common = self.common_points(chain[k], chain[k + 1]);
+            // Among the shared points, the one furthest from `q`: on the face of the chain
+            // nearest the cell, where the end contacts (outer tangents from the cell) lie too.
+            // A float choice only. In a straight row it keeps every chord on the front face;
+            // mixing faces cuts diagonal chords across the pieces and pinches the region.
+            let lk = ls[k];
             let mut best: Option<(f64, DVec2, DVec2)> = common
                 .iter()
-                .find(|&&v| orient(q, ls[k], v) == Ccw)
+                .filter(|&&v| orient(q, lk, v) == Ccw)
+                .max_by(|&&a, &&b| a.distance_squared(q).total_cmp(&b.distance_squared(q)))
                 .map(|&v| (f64::INFINITY, v, v));
             for c in [t.cross_left, t.cross_right].into_iter().flatten() {
                 let (r, l) = (pk[c.i], pn[c.j]);
