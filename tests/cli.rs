@@ -331,3 +331,98 @@ fn bake_only_the_cells_of_a_walkable_area() {
     assert!(!out.status.success());
     assert!(err.contains("feature 0") && err.contains("Point"), "{err}");
 }
+
+#[test]
+fn four_shards_in_four_processes_merge_into_the_single_bake() {
+    let dir = common::temp_dir("cli-shards");
+    let city = dir.join("city.geojson");
+    let p = |f: &std::path::Path| f.to_str().unwrap().to_string();
+    assert!(vocc(&[
+        "gen-city",
+        "--buildings",
+        "600",
+        "--seed",
+        "3",
+        "-o",
+        &p(&city)
+    ])
+    .status
+    .success());
+    let common_args = |out: &std::path::Path| {
+        vec![
+            "bake".to_string(),
+            p(&city),
+            "--height-attr".into(),
+            "height".into(),
+            "--cell-size".into(),
+            "50".into(),
+            "-o".into(),
+            p(out),
+        ]
+    };
+    let single = dir.join("single.vocc");
+    assert!(vocc(
+        &common_args(&single)
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>()
+    )
+    .status
+    .success());
+    // Four processes at once, one thread each.
+    let shards: Vec<std::path::PathBuf> = (0..4).map(|i| dir.join(format!("s{i}.vocc"))).collect();
+    let children: Vec<std::process::Child> = shards
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let mut a = common_args(s);
+            a.extend([
+                "--threads".into(),
+                "1".into(),
+                "--shard".into(),
+                format!("{i}/4"),
+            ]);
+            Command::new(env!("CARGO_BIN_EXE_vocc"))
+                .args(&a)
+                .current_dir(repo(""))
+                .stderr(std::process::Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().unwrap().success());
+    }
+    let merged = dir.join("merged.vocc");
+    let mut a = vec!["merge".to_string()];
+    a.extend(shards.iter().map(|s| p(s)));
+    a.extend(["-o".into(), p(&merged)]);
+    let out = vocc(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (m, s) = (
+        std::fs::read(&merged).unwrap(),
+        std::fs::read(&single).unwrap(),
+    );
+    assert!(s.len() > 136, "the single bake stored something");
+    assert_eq!(m, s, "merged shards differ from the single bake");
+    // A shard of another bake (other cell size) is refused.
+    let other = dir.join("other.vocc");
+    let mut a = common_args(&other);
+    a[5] = "100".into();
+    assert!(vocc(&a.iter().map(String::as_str).collect::<Vec<_>>())
+        .status
+        .success());
+    let out = vocc(&[
+        "merge",
+        &p(&shards[0]),
+        &p(&other),
+        "-o",
+        &p(&dir.join("bad.vocc")),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("another frame"));
+}

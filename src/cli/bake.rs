@@ -44,6 +44,16 @@ pub struct BakeArgs {
     /// Bake only the cells meeting this world rectangle X0,Y0,X1,Y1 (the others stay empty).
     #[arg(long, value_parser = parse_rect, allow_hyphen_values = true, value_name = "X0,Y0,X1,Y1")]
     pub region: Option<[f64; 4]>,
+    /// Bake only shard I of N: the cells whose id is I modulo N (`I/N`, 0-based), or `auto`: the
+    /// array index from Slurm (`SLURM_ARRAY_TASK_ID`, with `SLURM_ARRAY_TASK_COUNT`), a
+    /// Kubernetes Indexed Job (`JOB_COMPLETION_INDEX`) or AWS Batch (`AWS_BATCH_JOB_ARRAY_INDEX`),
+    /// the count from `--shard-count` when the engine does not give it. `vocc merge` joins the
+    /// shards into the store a single bake writes, byte for byte.
+    #[arg(long, value_name = "I/N|auto")]
+    pub shard: Option<String>,
+    /// The number of shards, for `--shard auto` under Kubernetes or AWS Batch.
+    #[arg(long, value_name = "N")]
+    pub shard_count: Option<u32>,
     /// Bake only the cells meeting the polygons of this GeoJSON (the walkable area, world
     /// coordinates); the others stay empty.
     #[arg(long, value_name = "GEOJSON")]
@@ -99,8 +109,56 @@ pub fn store_records(records: &[Record]) -> Result<Vec<CellRecord>> {
         .collect()
 }
 
+/// Which shard this process bakes: `(index, count)`.
+pub fn shard(
+    spec: &str,
+    count: Option<u32>,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<(u32, u32)> {
+    let num = |what: &str, v: &str| -> Result<u32> {
+        v.trim()
+            .parse::<u32>()
+            .with_context(|| format!("{what} must be a whole number, got {v:?}"))
+    };
+    let (i, n) = if spec == "auto" {
+        let from = [
+            "SLURM_ARRAY_TASK_ID",
+            "JOB_COMPLETION_INDEX",
+            "AWS_BATCH_JOB_ARRAY_INDEX",
+        ]
+        .iter()
+        .find_map(|k| env(k).map(|v| (*k, v)));
+        let (var, v) = from.context(
+            "--shard auto: none of SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX is set",
+        )?;
+        let i = num(var, &v)?;
+        let n = match (count, env("SLURM_ARRAY_TASK_COUNT")) {
+            (Some(n), _) => n,
+            (None, Some(c)) if var == "SLURM_ARRAY_TASK_ID" => num("SLURM_ARRAY_TASK_COUNT", &c)?,
+            _ => anyhow::bail!(
+                "--shard auto with {var}: give the number of shards with --shard-count N"
+            ),
+        };
+        (i, n)
+    } else {
+        let (i, n) = spec
+            .split_once('/')
+            .with_context(|| format!("--shard expects I/N or auto, got {spec:?}"))?;
+        (num("the shard index", i)?, num("the shard count", n)?)
+    };
+    anyhow::ensure!(
+        n >= 1 && i < n,
+        "shard index {i} is not below the shard count {n}"
+    );
+    Ok((i, n))
+}
+
 pub fn run(a: BakeArgs) -> Result<()> {
     let t0 = Instant::now();
+    let shard = match &a.shard {
+        Some(spec) => Some(shard(spec, a.shard_count, &|k| std::env::var(k).ok())?),
+        None => None,
+    };
     let s = scene::load(&a.scene, &a.read.options())?;
     let load_s = t0.elapsed().as_secs_f64();
     let region = a.region.map(|[x0, y0, x1, y1]| {
@@ -125,7 +183,11 @@ pub fn run(a: BakeArgs) -> Result<()> {
         ..BakeParams::default()
     };
     let plan = Plan::new(&s, params)?;
-    let cells = plan.cells();
+    let mut cells = plan.cells();
+    if let Some((i, n)) = shard {
+        cells.retain(|id| id % n == i);
+        eprintln!("shard {i}/{n}: {} cells", cells.len());
+    }
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = a.threads {
         anyhow::ensure!(n >= 1, "--threads must be at least 1");
@@ -199,4 +261,32 @@ pub fn run(a: BakeArgs) -> Result<()> {
         records.len()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shard;
+
+    #[test]
+    fn shard_from_arguments_and_array_engines() {
+        let none = |_: &str| None;
+        assert_eq!(shard("2/4", None, &none).unwrap(), (2, 4));
+        assert!(shard("4/4", None, &none).is_err());
+        assert!(shard("x/4", None, &none).is_err());
+        assert!(shard("auto", None, &none).is_err());
+        let slurm = |k: &str| match k {
+            "SLURM_ARRAY_TASK_ID" => Some("3".to_string()),
+            "SLURM_ARRAY_TASK_COUNT" => Some("8".to_string()),
+            _ => None,
+        };
+        assert_eq!(shard("auto", None, &slurm).unwrap(), (3, 8));
+        let k8s = |k: &str| (k == "JOB_COMPLETION_INDEX").then(|| "5".to_string());
+        assert!(
+            shard("auto", None, &k8s).is_err(),
+            "Kubernetes needs the count"
+        );
+        assert_eq!(shard("auto", Some(6), &k8s).unwrap(), (5, 6));
+        let aws = |k: &str| (k == "AWS_BATCH_JOB_ARRAY_INDEX").then(|| "0".to_string());
+        assert_eq!(shard("auto", Some(2), &aws).unwrap(), (0, 2));
+    }
 }

@@ -119,6 +119,15 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Join the shards of one bake (`vocc bake --shard I/N`) into the store a single bake writes.
+    Merge {
+        /// Shard store files.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Output store file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Evaluate a store against the ground truth: false culls (must be 0), PVS/VS, occlusion,
     /// occlusion against the number of VOs, culler time. Exit status 2 on any false cull.
     Eval(eval::EvalArgs),
@@ -278,6 +287,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Eval(a) => eval::eval(a),
+        Command::Merge { shards, output } => store::merge(shards, &output),
         Command::Results(a) => eval::results(a),
         Command::GenCity {
             buildings,

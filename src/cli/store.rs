@@ -357,3 +357,74 @@ pub fn render(
     );
     Ok(())
 }
+
+/// `vocc merge SHARD... -o STORE`: the shards of one bake (`vocc bake --shard I/N`) joined into
+/// the store a single bake writes. Every shard must have the same frame; each cell's record is
+/// the one shard's that baked it (cells no shard baked, and cells with no VOs, stay empty); two
+/// shards disagreeing on a cell is an error.
+pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
+    anyhow::ensure!(!shards.is_empty(), "give the shard files to merge");
+    let bytes: Vec<Vec<u8>> = shards
+        .iter()
+        .map(|p| read_store(p))
+        .collect::<Result<_>>()?;
+    let stores: Vec<Store> = shards
+        .iter()
+        .zip(&bytes)
+        .map(|(p, b)| parse(p, b))
+        .collect::<Result<_>>()?;
+    let frame = *stores[0].frame();
+    for (p, s) in shards.iter().zip(&stores).skip(1) {
+        anyhow::ensure!(
+            encode_frame(s.frame()) == encode_frame(&frame),
+            "{} has another frame (grid, origin, eyes or quantization) than {}: shards must come from one bake",
+            p.display(),
+            shards[0].display()
+        );
+    }
+    let n = stores[0].cell_count();
+    let mut from = vec![0usize; stores.len()];
+    let mut records = Vec::with_capacity(n as usize);
+    for id in 0..n {
+        let mut rec = CellRecord::EMPTY;
+        let mut owner: Option<usize> = None;
+        for (k, s) in stores.iter().enumerate() {
+            let r = s.cell(id)?;
+            if r == CellRecord::EMPTY {
+                continue;
+            }
+            match owner {
+                Some(o) if rec != r => anyhow::bail!(
+                    "cell {id} differs between {} and {}: shards must come from one bake",
+                    shards[o].display(),
+                    shards[k].display()
+                ),
+                Some(_) => {}
+                None => {
+                    owner = Some(k);
+                    rec = r;
+                }
+            }
+        }
+        if let Some(o) = owner {
+            from[o] += 1;
+        }
+        records.push(rec);
+    }
+    let out = vocc::runtime::format::encode_store(&frame, &records)?;
+    write_atomically(output, |w| w.write_all(&out))?;
+    let parts: Vec<String> = shards
+        .iter()
+        .zip(&from)
+        .map(|(p, c)| format!("{} {c}", p.display()))
+        .collect();
+    eprintln!(
+        "merged {} shards ({} cells with VOs or skipped: {}) into {} ({} bytes)",
+        shards.len(),
+        from.iter().sum::<usize>(),
+        parts.join(", "),
+        output.display(),
+        out.len()
+    );
+    Ok(())
+}
