@@ -40,3 +40,6 @@ pictures:
 	cp target/tmp/umbra-cases/fig3_staggered.svg docs/img/
 	$(CARGO) run --locked --release -- render --debug $(DEMO_SCENE) --height-attr HAUTEUR \
 		--at 1842000,5176050 -o docs/img/lyon_cell_100m.svg
+	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/lyon.vocc
+	$(CARGO) run --locked --release -- render target/lyon.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
+		--at 1842000,5176050 --radius 400 -o docs/img/lyon_cell_store.svg
