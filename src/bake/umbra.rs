@@ -228,25 +228,22 @@ impl<'a> Grower<'a> {
     }
 
     /// Vertices of either blocker that lie in both (closed), cached per pair.
-    fn common_points(&mut self, a: u32, b: u32) -> Vec<DVec2> {
+    fn common_points(&mut self, a: u32, b: u32) -> &[DVec2] {
         let (p, q) = (self.poly(a), self.poly(b));
-        self.common
-            .entry((a, b))
-            .or_insert_with(|| {
-                let ((pl, ph), (ql, qh)) = (bounds(p), bounds(q));
-                if pl.x > qh.x || ql.x > ph.x || pl.y > qh.y || ql.y > ph.y {
-                    return Vec::new();
-                }
-                p.iter()
-                    .chain(q.iter())
-                    .copied()
-                    .filter(|&v| {
-                        point_in_convex(p, v) != Containment::Outside
-                            && point_in_convex(q, v) != Containment::Outside
-                    })
-                    .collect()
-            })
-            .clone()
+        self.common.entry((a, b)).or_insert_with(|| {
+            let ((pl, ph), (ql, qh)) = (bounds(p), bounds(q));
+            if pl.x > qh.x || ql.x > ph.x || pl.y > qh.y || ql.y > ph.y {
+                return Vec::new();
+            }
+            p.iter()
+                .chain(q.iter())
+                .copied()
+                .filter(|&v| {
+                    point_in_convex(p, v) != Containment::Outside
+                        && point_in_convex(q, v) != Containment::Outside
+                })
+                .collect()
+        })
     }
 
     /// The chain's certified region as seen from the reference point `q` (module header).
