@@ -1,11 +1,12 @@
 //! The CI check of the whole chain against the ground truth: a seeded sample of Lyon's 100 m
 //! cells is baked, each cell's PVS is built by the runtime culler from the store's bytes, and the
-//! ground-truth visible set (rays against the original prisms, no VO code) must lie inside it.
+//! ground-truth visible set (rays against the original prisms, no VO code) must lie inside it;
+//! and rays from eye points to every stored VO must meet the original geometry first.
 
 mod common;
 
 use common::load_lyon;
-use vocc::eval::metrics::{cell_vs, eval_cell, object_boxes, sample_cells};
+use vocc::eval::metrics::{cell_vs, eval_cell, object_boxes, sample_cells, vo_rays};
 use vocc::eval::raycast::Caster;
 use vocc::eval::report::bake;
 use vocc::eval::truth::TruthParams;
@@ -31,7 +32,16 @@ fn no_false_culls_on_a_seeded_sample_of_lyon_cells() {
     };
     let mut culled = 0;
     let mut vos = 0;
+    let mut rays = 0;
     for &id in &ids {
+        // The 3D check: rays from eyes to the stored VOs meet real geometry first (rule 2).
+        let r = vo_rays(&caster, &store, id, 8, 8, 7);
+        assert_eq!(
+            r.reached, 0,
+            "cell {id}: {} of {} rays reached a VO",
+            r.reached, r.rays
+        );
+        rays += r.rays;
         let vs = cell_vs(&s, &store, &caster, id, &truth);
         let e = eval_cell(&s, &store, &tree, id, &vs);
         assert!(
@@ -53,5 +63,6 @@ fn no_false_culls_on_a_seeded_sample_of_lyon_cells() {
     }
     // The check must have something to check: VOs that cull.
     assert!(vos >= 30, "{vos} VOs");
+    assert!(rays >= 30 * 8 * 8 / 2, "{rays} rays checked the VOs");
     assert!(culled >= 50, "{culled} objects culled over the sample");
 }

@@ -3,7 +3,7 @@
 //!
 //! Input: a store and its scene; or dataset paths. Output: a report on stdout (text or JSON),
 //! Markdown and SVG files where asked. Exit status 2 when any false cull is found, so scripts
-//! and CI can rely on it.
+//! and CI can rely on it, or when a ray from an eye reaches a stored VO unblocked.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use vocc::eval::metrics::{object_boxes, sample_cells, summarize};
+use vocc::eval::metrics::{object_boxes, sample_cells, summarize, vo_rays_all};
 use vocc::eval::raycast::Caster;
 use vocc::eval::report::{
     dataset_section, eval_cells, eval_markdown, machine, visible_sets, Dataset, SuiteParams,
@@ -88,6 +88,8 @@ pub fn eval(a: EvalArgs) -> Result<()> {
     bar.set_message(format!("ground truth of {} cells", ids.len()));
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let vs = visible_sets(&s, &store, &caster, &ids, &truth);
+    // The 3D check of the stored VOs: 16 eye points x 16 points per VO.
+    let rays = vo_rays_all(&caster, &store, &ids, 16, 16, a.truth.seed);
     bar.finish_and_clear();
     let cells = eval_cells(&s, &store, &tree, &ids, &vs);
     let sum = summarize(&s, &cells);
@@ -95,7 +97,7 @@ pub fn eval(a: EvalArgs) -> Result<()> {
     if a.json {
         serde_json::to_writer_pretty(
             &mut out,
-            &serde_json::json!({"summary": sum, "cells": cells, "machine": machine()}),
+            &serde_json::json!({"summary": sum, "vo_rays": rays, "cells": cells, "machine": machine()}),
         )?;
         writeln!(out)?;
     } else {
@@ -121,6 +123,11 @@ pub fn eval(a: EvalArgs) -> Result<()> {
             "objects culled with the first k VOs: {}",
             by.join(", ")
         )?;
+        writeln!(
+            out,
+            "3D check of the stored VOs: {} rays from eye points to VO points, {} reached a VO unblocked",
+            rays.rays, rays.reached
+        )?;
     }
     if let Some(dir) = &a.report {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
@@ -135,10 +142,10 @@ pub fn eval(a: EvalArgs) -> Result<()> {
         crate::write_atomically(&dir.join("eval.md"), |w| w.write_all(md.as_bytes()))?;
         eprintln!("wrote {}", dir.join("eval.md").display());
     }
-    if sum.false_culls > 0 {
+    if sum.false_culls > 0 || rays.reached > 0 {
         eprintln!(
-            "error: {} false culls (visible objects the PVS misses)",
-            sum.false_culls
+            "error: {} false culls (visible objects the PVS misses), {} rays reached a VO unblocked",
+            sum.false_culls, rays.reached
         );
         std::process::exit(2);
     }

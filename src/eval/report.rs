@@ -20,7 +20,7 @@ use crate::scene::{self, ReadOptions, Scene};
 
 use super::metrics::{
     cell_vs, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
-    CellEval, Summary,
+    vo_rays_all, CellEval, Summary,
 };
 use super::plot::{cell_map, chart, Series};
 use super::raycast::Caster;
@@ -177,6 +177,7 @@ pub fn dataset_section(
     let ev = eval_cells(&s, &store, &tree, &all, &vs_all);
     let sm = summarize(&s, &ev);
     let (med, p95) = bake_ms(&main.cells);
+    let rays = vo_rays_all(&caster, &store, &all, 16, 16, p.seed);
     let nbytes = main.bytes.len() as f64 / store.cell_count().max(1) as f64;
 
     let _ = writeln!(md, "### Default bake, 100 m cells, every cell\n");
@@ -189,6 +190,11 @@ pub fn dataset_section(
     );
     let _ = writeln!(md, "{HEAD}\n{RULE}");
     row(&mut md, "vocc, 10 VOs", &sm, "");
+    let _ = writeln!(
+        md,
+        "\n3D check of the stored VOs (DESIGN.md 6.2): {} rays from 16 eye points per cell to 16 points of each VO quad; {} reached a VO without meeting the original geometry first.",
+        rays.rays, rays.reached
+    );
     let _ = writeln!(
         md,
         "\nStore: {:.1} bytes per cell ({} bytes, {:.2} VOs per cell). Bake: {:.1} ms per cell median, {:.1} ms p95, {:.1} s for the whole scene on {} threads. Culler: {:.0} µs median, {:.0} µs p95 per cell entry. Ground truth: {:.1} s.\n",
