@@ -10,8 +10,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use vocc::bake::pipeline::{bake_cells, records, BakeParams, Plan, Record};
-use vocc::runtime::format::{encode_store, CellRecord};
+use vocc::bake::pipeline::{bake_cells, encode, records, BakeParams, Plan};
 use vocc::scene::{self, ReadOptions};
 
 fn pct(v: &[f64], p: f64) -> f64 {
@@ -53,14 +52,8 @@ fn main() {
         let baked = pool.install(|| bake_cells(&plan, &cells, &|_| {}));
         let secs = t.elapsed().as_secs_f64();
         let ms: Vec<f64> = baked.iter().map(|c| c.stats.ms).collect();
-        let recs: Vec<CellRecord> = records(&plan.frame, &baked)
-            .iter()
-            .map(|r| match r {
-                Record::Skipped => CellRecord::Skipped,
-                Record::Vos { ground, vos } => CellRecord::new(*ground, vos).unwrap(),
-            })
-            .collect();
-        let bytes = encode_store(&plan.frame, &recs).unwrap();
+        let recs = records(&plan.frame, &baked);
+        let bytes = encode(&plan.frame, &baked).unwrap();
         let vos: usize = recs.iter().map(|r| r.vos().len()).sum();
         let b = *base.get_or_insert(secs);
         println!(

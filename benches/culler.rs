@@ -11,47 +11,23 @@
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use vocc::bake::pipeline::{bake_cells, records, BakeParams, Plan, Record};
+use vocc::bake::pipeline::BakeParams;
+use vocc::eval::metrics::object_boxes;
+use vocc::eval::report::bake;
 use vocc::runtime::culler::{pvs, pvs_with_stats, BoxTree};
-use vocc::runtime::format::{encode_store, CellRecord, Store};
+use vocc::runtime::format::Store;
 use vocc::scene::{self, ReadOptions, Scene};
 
-fn store_of(s: &Scene, cell_size: f64, region: Option<[f64; 4]>) -> Vec<u8> {
-    let plan = Plan::new(
-        s,
-        BakeParams {
-            cell_size,
-            region,
-            ..BakeParams::default()
-        },
-    )
-    .unwrap();
-    let baked = bake_cells(&plan, &plan.cells(), &|_| {});
-    let recs: Vec<CellRecord> = records(&plan.frame, &baked)
-        .iter()
-        .map(|r| match r {
-            Record::Skipped => CellRecord::Skipped,
-            Record::Vos { ground, vos } => CellRecord::new(*ground, vos).unwrap(),
-        })
-        .collect();
-    encode_store(&plan.frame, &recs).unwrap()
-}
-
-fn boxes(s: &Scene) -> Vec<[f64; 6]> {
-    s.objects
-        .iter()
-        .map(|o| {
-            let (a, b) = (o.bbox.min, o.bbox.max);
-            [a.x, a.y, a.z, b.x, b.y, b.z]
-        })
-        .collect()
-}
-
 fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, cell_size: f64, region: Option<[f64; 4]>) {
-    let bytes = store_of(s, cell_size, region);
+    let params = BakeParams {
+        cell_size,
+        region,
+        ..BakeParams::default()
+    };
+    let bytes = bake(s, params, None).bytes;
     let store = Store::parse(&bytes).unwrap();
     // The scene's local frame is the store's: both come from the same load.
-    let tree = BoxTree::new(&boxes(s));
+    let tree = BoxTree::new(&object_boxes(s));
     let cells: Vec<u32> = (0..store.cell_count())
         .filter(|&id| !store.cell(id).unwrap().vos().is_empty())
         .collect();

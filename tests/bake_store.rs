@@ -6,10 +6,11 @@ mod common;
 
 use common::{brute_hidden, load_lyon};
 use glam::DVec2;
-use vocc::bake::pipeline::{bake_cells, records, BakeParams, Plan, Record};
+use vocc::bake::pipeline::BakeParams;
+use vocc::eval::report::bake;
 use vocc::geom::predicates::convex_interiors_disjoint;
 use vocc::geom::verify::Verifier;
-use vocc::runtime::format::{encode_store, CellRecord, Store};
+use vocc::runtime::format::Store;
 use vocc::scene::Scene;
 
 /// The centre of Lyon's extract: 3 x 3 cells of 100 m around the cell of the README's picture.
@@ -23,21 +24,11 @@ fn store_bytes(s: &Scene, threads: usize) -> Vec<u8> {
         region: Some(region(s)),
         ..BakeParams::default()
     };
-    let plan = Plan::new(s, params).unwrap();
-    let cells = plan.cells();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .unwrap();
-    let baked = pool.install(|| bake_cells(&plan, &cells, &|_| {}));
-    let recs: Vec<CellRecord> = records(&plan.frame, &baked)
-        .iter()
-        .map(|r| match r {
-            Record::Skipped => CellRecord::Skipped,
-            Record::Vos { ground, vos } => CellRecord::new(*ground, vos).unwrap(),
-        })
-        .collect();
-    encode_store(&plan.frame, &recs).unwrap()
+    pool.install(|| bake(s, params, None).bytes)
 }
 
 /// Least distance between an axis-aligned rectangle and a segment that misses it (written here

@@ -25,6 +25,7 @@ use super::umbra::{self, CellGrower, GrowParams};
 use super::BlockerSet;
 use crate::geom::predicates::{point_in_convex, Containment};
 use crate::geom::verify::Verifier;
+use crate::runtime::format::{encode_store, CellRecord, FormatError};
 use crate::runtime::frame::{Frame, QVo, HEIGHT_LEVELS, MAX_VOS_PER_CELL, QUANT_STEPS};
 use crate::runtime::grid::{CellId, GridDescriptor};
 use crate::scene::Scene;
@@ -101,17 +102,6 @@ pub enum BakeError {
     TooManyCells(u64),
 }
 
-/// One cell's stored record.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Record {
-    /// The cell lies inside a building: no eye can be there.
-    Skipped,
-    Vos {
-        ground: u8,
-        vos: Vec<QVo>,
-    },
-}
-
 /// What baking one cell took.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CellStats {
@@ -140,7 +130,8 @@ pub struct CellStats {
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellBake {
     pub id: CellId,
-    pub record: Record,
+    /// What the store holds for the cell: skipped (inside a building), or its ground and VOs.
+    pub record: CellRecord,
     pub stats: CellStats,
 }
 
@@ -296,24 +287,17 @@ impl<'s> Plan<'s> {
     pub fn bake_cell(&self, id: CellId) -> CellBake {
         let t0 = Instant::now();
         let mut stats = CellStats::default();
-        let record = match self.bake_record(id, &mut stats) {
-            // A cell without VOs stores no ground byte: its ground is 0 in the record.
-            Record::Vos { vos, .. } if vos.is_empty() => Record::Vos { ground: 0, vos },
-            r => r,
-        };
+        let record = self.bake_record(id, &mut stats);
         stats.ms = t0.elapsed().as_secs_f64() * 1e3;
         CellBake { id, record, stats }
     }
 
-    fn bake_record(&self, id: CellId, stats: &mut CellStats) -> Record {
+    fn bake_record(&self, id: CellId, stats: &mut CellStats) -> CellRecord {
         let f = &self.frame;
         let cell = self.cell_polygon(id);
         let ground = self.ground_level(id);
         let Some(view) = f.cell_view(id, ground) else {
-            return Record::Vos {
-                ground,
-                vos: vec![],
-            };
+            return CellRecord::EMPTY;
         };
         let (g, e0, e1) = (f.ground_z(ground), view.e0, view.e1);
         // A cell wholly inside one blocker that stands above the eyes holds no eye.
@@ -326,7 +310,7 @@ impl<'s> Plan<'s> {
                     .all(|&c| point_in_convex(p, c) != Containment::Outside)
         });
         if inside {
-            return Record::Skipped;
+            return CellRecord::Skipped;
         }
         // Blockers that may support a VO: near, apart from the cell, standing from the ground
         // (rule 2: base <= min(e0, g)) to above the eyes.
@@ -335,10 +319,7 @@ impl<'s> Plan<'s> {
             .filter(|&i| self.base[i as usize] <= g.min(e0) && self.top[i as usize] > e1)
             .collect();
         if near.is_empty() {
-            return Record::Vos {
-                ground,
-                vos: vec![],
-            };
+            return CellRecord::EMPTY;
         }
         let centre = (cell[0] + cell[2]) * 0.5;
         let support: Vec<Support> = near
@@ -490,7 +471,9 @@ impl<'s> Plan<'s> {
         all.sort_unstable();
         all.dedup();
         stats.hidden_cost = self.occludees.cost_of(&all);
-        Record::Vos { ground, vos }
+        // A cell without VOs stores no ground byte: its ground is 0 in the record.
+        let ground = if vos.is_empty() { 0 } else { ground };
+        CellRecord::new(ground, &vos).expect("greedy stops at max_vos, checked <= 10 in Plan::new")
     }
 
     /// Rule 2 then rule 1 for a dequantized VO `a`–`b` of top `h`: the blockers that support it,
@@ -533,19 +516,17 @@ pub fn bake_cells(
 
 /// The stored record of every cell of the grid, in id order: baked cells from `baked`, the rest
 /// empty.
-pub fn records(frame: &Frame, baked: &[CellBake]) -> Vec<Record> {
-    let n = frame.grid.cell_count() as usize;
-    let mut out = vec![
-        Record::Vos {
-            ground: 0,
-            vos: vec![]
-        };
-        n
-    ];
+pub fn records(frame: &Frame, baked: &[CellBake]) -> Vec<CellRecord> {
+    let mut out = vec![CellRecord::EMPTY; frame.grid.cell_count() as usize];
     for c in baked {
         if let Some(slot) = out.get_mut(c.id as usize) {
-            *slot = c.record.clone();
+            *slot = c.record;
         }
     }
     out
+}
+
+/// The store's bytes for a bake: [`records`], encoded.
+pub fn encode(frame: &Frame, baked: &[CellBake]) -> Result<Vec<u8>, FormatError> {
+    encode_store(frame, &records(frame, baked))
 }

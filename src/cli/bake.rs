@@ -10,7 +10,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use vocc::bake::pipeline::{self, BakeParams, Plan, Record, Slices};
+use vocc::bake::pipeline::{self, BakeParams, Plan, Slices};
 use vocc::runtime::format::{encode_store, CellRecord};
 use vocc::scene;
 
@@ -96,17 +96,6 @@ fn parse_rect(s: &str) -> Result<[f64; 4], String> {
             "expected X0,Y0,X1,Y1 with X0 <= X1 and Y0 <= Y1, got {s:?}"
         )),
     }
-}
-
-/// Converts the pipeline's records to the store's.
-pub fn store_records(records: &[Record]) -> Result<Vec<CellRecord>> {
-    records
-        .iter()
-        .map(|r| match r {
-            Record::Skipped => Ok(CellRecord::Skipped),
-            Record::Vos { ground, vos } => Ok(CellRecord::new(*ground, vos)?),
-        })
-        .collect()
 }
 
 /// Which shard this process bakes: `(index, count)`.
@@ -209,7 +198,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
     });
     bar.finish_and_clear();
     let bake_s = t1.elapsed().as_secs_f64();
-    let records = store_records(&pipeline::records(&plan.frame, &baked))?;
+    let records = pipeline::records(&plan.frame, &baked);
     let bytes = encode_store(&plan.frame, &records)?;
     write_atomically(&a.output, |w| std::io::Write::write_all(w, &bytes))?;
 

@@ -337,11 +337,7 @@ pub fn render(
     };
     params.grow.single_object = true;
     let plan = vocc::bake::pipeline::Plan::new(&s, params)?;
-    let base = plan.bake_cell(id);
-    let base_rec = match base.record {
-        vocc::bake::pipeline::Record::Skipped => CellRecord::Skipped,
-        vocc::bake::pipeline::Record::Vos { ground, vos } => CellRecord::new(ground, &vos)?,
-    };
+    let base_rec = plan.bake_cell(id).record;
     let mut base_visible = Vec::new();
     vocc::runtime::culler::pvs(&plan.frame, id, &base_rec, &tree, &mut base_visible);
     let svg =

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::bake::pipeline::{bake_cells, records, BakeParams, CellBake, Plan, Record, Slices};
+use crate::bake::pipeline::{bake_cells, encode, BakeParams, CellBake, Plan, Slices};
 use crate::runtime::culler::BoxTree;
 use crate::runtime::format::{encode_store, CellRecord, Store};
 use crate::runtime::CellId;
@@ -55,17 +55,8 @@ pub fn bake(scene: &Scene, params: BakeParams, cells: Option<&[CellId]>) -> Bake
     let t = Instant::now();
     let baked = bake_cells(&plan, &ids, &|_| {});
     let seconds = t.elapsed().as_secs_f64();
-    let recs: Vec<CellRecord> = records(&plan.frame, &baked)
-        .iter()
-        .map(|r| match r {
-            Record::Skipped => CellRecord::Skipped,
-            Record::Vos { ground, vos } => {
-                CellRecord::new(*ground, vos).unwrap_or(CellRecord::EMPTY)
-            }
-        })
-        .collect();
     Baked {
-        bytes: encode_store(&plan.frame, &recs).expect("the bake's records encode"),
+        bytes: encode(&plan.frame, &baked).expect("the bake's records encode"),
         cells: baked,
         seconds,
     }
@@ -414,10 +405,7 @@ pub fn dataset_section(
         let bytes = v
             .cells
             .iter()
-            .map(|c| match &c.record {
-                Record::Vos { vos, .. } if !vos.is_empty() => 1.0 + 5.0 * vos.len() as f64,
-                _ => 1.0,
-            })
+            .map(|c| 1.0 + 5.0 * c.record.vos().len() as f64)
             .sum::<f64>()
             / v.cells.len().max(1) as f64;
         row(
