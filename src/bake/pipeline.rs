@@ -350,6 +350,11 @@ impl<'s> Plan<'s> {
         let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
         let mut hidden: Vec<Vec<u32>> = Vec::new();
         let mut grower = CellGrower::new(&cell, &self.set, &self.params.grow);
+        let win = {
+            let (lo, hi) = window(f, centre);
+            let step = DVec2::splat(f.quantum);
+            (lo + step, hi - step)
+        };
         let mut previous: Option<Vec<u32>> = None;
         for &k in &stats.levels {
             let ids: Vec<u32> = near
@@ -367,9 +372,7 @@ impl<'s> Plan<'s> {
             previous = Some(ids);
             for mut v in dense.vos {
                 // Only the part inside the quantization window (less a grid step) can be stored.
-                let (lo, hi) = window(f, centre);
-                let step = DVec2::splat(f.quantum);
-                let Some((a, b)) = clip(v.a, v.b, lo + step, hi - step) else {
+                let Some((a, b)) = clip(v.a, v.b, win.0, win.1) else {
                     continue;
                 };
                 if a.distance(b) < 2.0 * f.quantum {

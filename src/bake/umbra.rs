@@ -727,18 +727,7 @@ pub fn grow_seed(
 
 /// Grows the dense VO set of one cell and passes it through the exact verifier.
 pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellVos {
-    grow_cell_among(cell, set, params, &usable(cell, set, params))
-}
-
-/// [`grow_cell`] over the given blockers only (sorted ids, none overlapping the cell): the
-/// blockers that support a slice.
-pub fn grow_cell_among(
-    cell: &[DVec2],
-    set: &BlockerSet,
-    params: &GrowParams,
-    near_sorted: &[u32],
-) -> CellVos {
-    CellGrower::new(cell, set, params).grow(near_sorted)
+    CellGrower::new(cell, set, params).grow(&usable(cell, set, params))
 }
 
 /// The growth of one cell over several blocker subsets (the slices), sharing the tangents and

@@ -14,7 +14,7 @@ use vocc::bake::pipeline::{self, BakeParams, Plan, Slices};
 use vocc::runtime::format::{encode_store, CellRecord};
 use vocc::scene;
 
-use crate::{write_atomically, ReadArgs};
+use crate::{parse_num, write_atomically, ReadArgs};
 
 #[derive(Args)]
 pub struct BakeArgs {
@@ -64,14 +64,7 @@ fn parse_range(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
         .split_once("..")
         .ok_or_else(|| format!("expected LOW..HIGH, got {s:?}"))?;
-    let num = |t: &str| {
-        t.trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| format!("{t:?} is not a finite number"))
-    };
-    Ok((num(a)?, num(b)?))
+    Ok((parse_num(a)?, parse_num(b)?))
 }
 
 fn parse_slices(s: &str) -> Result<Slices, String> {
@@ -87,7 +80,7 @@ fn parse_slices(s: &str) -> Result<Slices, String> {
 fn parse_rect(s: &str) -> Result<[f64; 4], String> {
     let v: Vec<f64> = s
         .split(',')
-        .map(|t| t.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+        .map(|t| parse_num(t).ok())
         .collect::<Option<Vec<f64>>>()
         .ok_or_else(|| format!("expected four numbers X0,Y0,X1,Y1, got {s:?}"))?;
     match v[..] {

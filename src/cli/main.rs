@@ -179,19 +179,21 @@ impl ReadArgs {
     }
 }
 
+/// Parses a finite number (the one number rule of every option).
+pub(crate) fn parse_num(t: &str) -> Result<f64, String> {
+    t.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| format!("{t:?} is not a finite number"))
+}
+
 /// Parses "X,Y".
 fn parse_xy(s: &str) -> Result<(f64, f64), String> {
     let (x, y) = s
         .split_once(',')
         .ok_or_else(|| format!("expected X,Y, got {s:?}"))?;
-    let num = |t: &str| {
-        t.trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| format!("{t:?} is not a finite number"))
-    };
-    Ok((num(x)?, num(y)?))
+    Ok((parse_num(x)?, parse_num(y)?))
 }
 
 fn main() {

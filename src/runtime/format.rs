@@ -520,15 +520,7 @@ impl<'a> Store<'a> {
         let cells = frame.grid.cell_count();
         let blocks = blocks_of(cells);
         let expected = HEADER_LEN as u64 + cells + 4 * blocks + payload_len as u64;
-        if got < expected {
-            return Err(FormatError::Truncated {
-                needed: expected,
-                got,
-            });
-        }
-        if got > expected {
-            return Err(FormatError::TrailingBytes { expected, got });
-        }
+        exact_length(expected, got)?;
 
         let mut crc = Crc32::new();
         crc.update(header.first_chunk::<CRC_OFFSET>().ok_or(short.clone())?);
@@ -733,6 +725,21 @@ fn push_record(out: &mut Vec<u8>, rec: &CellRecord, ground_byte: bool) {
     }
 }
 
+/// `got` bytes where exactly `expected` are needed: too few is `Truncated`, too many
+/// `TrailingBytes`.
+fn exact_length(expected: u64, got: u64) -> Result<(), FormatError> {
+    if got < expected {
+        return Err(FormatError::Truncated {
+            needed: expected,
+            got,
+        });
+    }
+    if got > expected {
+        return Err(FormatError::TrailingBytes { expected, got });
+    }
+    Ok(())
+}
+
 /// Encodes a store file: `cells[i]` is the record of cell `i` (`cells.len() == nx * ny`).
 pub fn encode_store(frame: &Frame, cells: &[CellRecord]) -> Result<Vec<u8>, FormatError> {
     validate_frame(frame)?;
@@ -832,15 +839,7 @@ pub fn decode_blob(frame: &Frame, bytes: &[u8]) -> Result<(CellId, CellRecord), 
     let ground_byte = frame.per_cell_ground();
     let size = record_size(n, ground_byte);
     let expected = BLOB_MIN_LEN as u64 + size;
-    if got < expected {
-        return Err(FormatError::Truncated {
-            needed: expected,
-            got,
-        });
-    }
-    if got > expected {
-        return Err(FormatError::TrailingBytes { expected, got });
-    }
+    exact_length(expected, got)?;
     let (body, tail) = bytes
         .split_last_chunk::<4>()
         .ok_or(FormatError::Truncated {
