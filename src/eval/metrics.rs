@@ -33,7 +33,8 @@ pub struct CellEval {
     pub false_culls: Vec<u32>,
     /// PVS build time, µs (one run, after a warm-up run).
     pub pvs_us: f64,
-    /// |PVS| with only the first k stored VOs, k = 0..=10 (k = 0: every object).
+    /// |PVS| with only the first k stored VOs, k = 0..=10 (k = 0: every object); empty when not
+    /// measured.
     pub pvs_by_vos: Vec<usize>,
 }
 
@@ -133,16 +134,6 @@ pub fn eval_cell(scene: &Scene, store: &Store, tree: &BoxTree, id: CellId, vs: &
     let t = Instant::now();
     pvs(f, id, &rec, tree, &mut out);
     let pvs_us = t.elapsed().as_secs_f64() * 1e6;
-    let false_culls: Vec<u32> = vs
-        .iter()
-        .copied()
-        .filter(|i| out.binary_search(i).is_err())
-        .collect();
-    let tris = |ids: &[u32]| -> u64 {
-        ids.iter()
-            .map(|&i| scene.objects.get(i as usize).map_or(0, |o| o.cost))
-            .sum()
-    };
     let mut by = Vec::with_capacity(MAX_VOS_PER_CELL + 1);
     let mut tmp = Vec::new();
     for k in 0..=MAX_VOS_PER_CELL {
@@ -150,15 +141,33 @@ pub fn eval_cell(scene: &Scene, store: &Store, tree: &BoxTree, id: CellId, vs: &
         by.push(tmp.len());
     }
     CellEval {
-        cell: id,
-        vos: rec.vos().len(),
-        vs: vs.len(),
-        pvs: out.len(),
-        vs_triangles: tris(vs),
-        pvs_triangles: tris(&out),
-        false_culls,
         pvs_us,
         pvs_by_vos: by,
+        ..compare(scene, id, rec.vos().len(), vs, &out)
+    }
+}
+
+/// A cell's PVS (ascending) against its VS: sizes, triangles, false culls (no timing, no VO
+/// sweep).
+pub fn compare(scene: &Scene, id: CellId, vos: usize, vs: &[u32], pvs: &[u32]) -> CellEval {
+    let tris = |ids: &[u32]| -> u64 {
+        ids.iter()
+            .map(|&i| scene.objects.get(i as usize).map_or(0, |o| o.cost))
+            .sum()
+    };
+    CellEval {
+        cell: id,
+        vos,
+        vs: vs.len(),
+        pvs: pvs.len(),
+        vs_triangles: tris(vs),
+        pvs_triangles: tris(pvs),
+        false_culls: vs
+            .iter()
+            .copied()
+            .filter(|i| pvs.binary_search(i).is_err())
+            .collect(),
+        ..CellEval::default()
     }
 }
 
@@ -322,7 +331,12 @@ pub fn summarize(scene: &Scene, cells: &[CellEval]) -> Summary {
         median_pvs_us: percentile(&cells.iter().map(|c| c.pvs_us).collect::<Vec<_>>(), 0.5),
         p95_pvs_us: percentile(&cells.iter().map(|c| c.pvs_us).collect::<Vec<_>>(), 0.95),
         occluded_by_vos: (0..=MAX_VOS_PER_CELL)
-            .map(|k| mean(&|c| 1.0 - c.pvs_by_vos[k] as f64 / objects.max(1) as f64))
+            .map(|k| {
+                mean(&|c| {
+                    let p = c.pvs_by_vos.get(k).copied().unwrap_or(c.pvs);
+                    1.0 - p as f64 / objects.max(1) as f64
+                })
+            })
             .collect(),
         mean_vos: mean(&|c| c.vos as f64),
     }

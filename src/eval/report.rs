@@ -19,7 +19,7 @@ use crate::runtime::CellId;
 use crate::scene::{self, ReadOptions, Scene};
 
 use super::metrics::{
-    cell_vs, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
+    cell_vs, compare, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
     vo_rays_all, CellEval, Summary,
 };
 use super::plot::{cell_map, chart, Series};
@@ -322,15 +322,7 @@ pub fn dataset_section(
             let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
             let view = f.cell_view(id, rec.ground()).expect("in grid");
             let pvs = pvs_from_geoms(&view, &c.stats.unquantized, &boxes);
-            let mut e = eval_cell(&s, &store, &tree, id, vs);
-            e.pvs = pvs.len();
-            e.pvs_triangles = pvs.iter().map(|&i| s.objects[i as usize].cost).sum();
-            e.false_culls = vs
-                .iter()
-                .copied()
-                .filter(|i| pvs.binary_search(i).is_err())
-                .collect();
-            e
+            compare(&s, id, c.stats.unquantized.len(), vs, &pvs)
         })
         .collect();
     row(
