@@ -233,9 +233,9 @@ fn geojson(buildings: &[Building], offset: f64) -> String {
             .iter()
             .map(|&(x, y)| format!("[{:?},{:?}]", offset + x, offset + y))
             .collect();
-        let _ = write!(
+        let _ = writeln!(
             s,
-            "{}{{\"type\":\"Feature\",\"properties\":{{\"h\":{:?}}},\"geometry\":{{\"type\":\"Polygon\",\"coordinates\":[[{}]]}}}}\n",
+            "{}{{\"type\":\"Feature\",\"properties\":{{\"h\":{:?}}},\"geometry\":{{\"type\":\"Polygon\",\"coordinates\":[[{}]]}}}}",
             if i == 0 { "" } else { "," },
             b.h,
             ring.join(",")

@@ -8,6 +8,7 @@
 //! dequantized form; a VO that fails is shrunk or dropped and counted.
 
 pub mod decimate;
+pub mod incremental;
 pub mod pipeline;
 pub mod quantize;
 pub mod seed;

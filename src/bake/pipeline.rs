@@ -234,6 +234,20 @@ impl<'s> Plan<'s> {
         })
     }
 
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    pub fn params(&self) -> &BakeParams {
+        &self.params
+    }
+
+    /// How far from a cell's centre its bake reads the scene (metres, per axis): the growth's
+    /// search distance past the cell, and the occludees weighed within this distance.
+    pub fn reach(&self) -> f64 {
+        self.params.grow.search_m + self.frame.grid.cell_size
+    }
+
     /// The cells to bake, ascending: those meeting the region and the walkable area, when
     /// given (the others stay empty in the store: no VOs, so the culler keeps everything).
     pub fn cells(&self) -> Vec<CellId> {
@@ -346,7 +360,7 @@ impl<'s> Plan<'s> {
         stats.levels = choose_levels(&levels, &adjusted, n);
 
         // The dense set, per slice.
-        let radius = self.params.grow.search_m + self.frame.grid.cell_size;
+        let radius = self.reach();
         let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
         let mut hidden: Vec<Vec<u32>> = Vec::new();
         let mut grower = CellGrower::new(&cell, &self.set, &self.params.grow);

@@ -10,8 +10,10 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use vocc::bake::incremental::{hashes_path, CellHashes};
 use vocc::bake::pipeline::{self, BakeParams, Plan, Slices};
-use vocc::runtime::format::{encode_store, CellRecord};
+use vocc::runtime::crc::crc32;
+use vocc::runtime::format::{encode_frame, encode_store, CellRecord};
 use vocc::scene;
 
 use crate::{parse_num, write_atomically, ReadArgs};
@@ -58,6 +60,11 @@ pub struct BakeArgs {
     /// coordinates); the others stay empty.
     #[arg(long, value_name = "GEOJSON")]
     pub cells: Option<PathBuf>,
+    /// Incremental rebake: reuse the records of this older store (and its `.hashes` file, which
+    /// every bake writes beside its store) for the cells whose neighbourhood did not change; bake
+    /// the rest. The output is byte-identical to a full bake.
+    #[arg(long, value_name = "OLD_STORE")]
+    pub reuse: Option<PathBuf>,
 }
 
 fn parse_range(s: &str) -> Result<(f64, f64), String> {
@@ -135,6 +142,43 @@ pub fn shard(
     Ok((i, n))
 }
 
+/// The hashes and bytes of the older store `old` when its cells may be reused under `plan`;
+/// `None` (every cell is baked, and the reason is printed) when its hashes are missing, belong
+/// to another store, or its frame differs.
+fn reusable(
+    old: &std::path::Path,
+    plan: &Plan,
+    hashes: &CellHashes,
+) -> Result<Option<(CellHashes, Vec<u8>)>> {
+    let bytes = crate::store::read_store(old)?;
+    let store = crate::store::parse(old, &bytes)?;
+    let hp = hashes_path(old);
+    let old_hashes = match std::fs::read(&hp) {
+        Ok(b) => CellHashes::decode(&b).with_context(|| format!("{} is damaged", hp.display()))?,
+        Err(e) => {
+            eprintln!(
+                "incremental: cannot read {} ({e}); baking every cell",
+                hp.display()
+            );
+            return Ok(None);
+        }
+    };
+    let why = if old_hashes.store_crc != crc32(&bytes) {
+        Some(format!("{} belongs to another store", hp.display()))
+    } else if encode_frame(store.frame()) != encode_frame(&plan.frame) {
+        Some("the grid, origin, eyes, ground range or quantization changed".to_string())
+    } else if old_hashes.global != hashes.global {
+        Some("the options or the vocc version changed".to_string())
+    } else {
+        None
+    };
+    if let Some(why) = why {
+        eprintln!("incremental: {why}; baking every cell");
+        return Ok(None);
+    }
+    Ok(Some((old_hashes, bytes)))
+}
+
 pub fn run(a: BakeArgs) -> Result<()> {
     let t0 = Instant::now();
     let shard = match &a.shard {
@@ -170,6 +214,35 @@ pub fn run(a: BakeArgs) -> Result<()> {
         cells.retain(|id| id % n == i);
         eprintln!("shard {i}/{n}: {} cells", cells.len());
     }
+    let hashes = CellHashes::new(&plan, &cells);
+    let reused_from = match &a.reuse {
+        Some(old) => reusable(old, &plan, &hashes)?,
+        None => None,
+    };
+    let (to_bake, reused): (Vec<u32>, Vec<(u32, CellRecord)>) = match &reused_from {
+        Some((old_hashes, old_bytes)) => {
+            let old_store = vocc::runtime::format::Store::parse(old_bytes)?;
+            let bake = hashes.changed(old_hashes, &cells);
+            let mut reused = Vec::with_capacity(cells.len() - bake.len());
+            for &id in &cells {
+                if bake.binary_search(&id).is_err() {
+                    reused.push((id, old_store.cell(id)?));
+                }
+            }
+            (bake, reused)
+        }
+        None => (cells.clone(), Vec::new()),
+    };
+    if let Some(old) = &a.reuse {
+        eprintln!(
+            "incremental: {} of {} cells changed since {}, {} reused",
+            to_bake.len(),
+            cells.len(),
+            old.display(),
+            reused.len()
+        );
+    }
+    let cells = to_bake;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = a.threads {
         anyhow::ensure!(n >= 1, "--threads must be at least 1");
@@ -191,9 +264,28 @@ pub fn run(a: BakeArgs) -> Result<()> {
     });
     bar.finish_and_clear();
     let bake_s = t1.elapsed().as_secs_f64();
-    let records = pipeline::records(&plan.frame, &baked);
+    let mut records = pipeline::records(&plan.frame, &baked);
+    for (id, rec) in reused {
+        records[id as usize] = rec;
+    }
     let bytes = encode_store(&plan.frame, &records)?;
+    // The old hashes go first, the new ones last: a run stopped in between leaves a store
+    // without hashes (the next `--reuse` bakes every cell), never a store with stale hashes.
+    let hashes_file = hashes_path(&a.output);
+    match std::fs::remove_file(&hashes_file) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(e).with_context(|| format!("cannot remove {}", hashes_file.display()))
+        }
+        _ => {}
+    }
     write_atomically(&a.output, |w| std::io::Write::write_all(w, &bytes))?;
+    let hashes = CellHashes {
+        store_crc: crc32(&bytes),
+        ..hashes
+    };
+    write_atomically(&hashes_file, |w| {
+        std::io::Write::write_all(w, &hashes.encode())
+    })?;
 
     let n = baked.len().max(1);
     let vos: usize = records.iter().map(|r| r.vos().len()).sum();

@@ -12,6 +12,8 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use serde_json::json;
 
+use vocc::bake::incremental::{hashes_path, CellHashes};
+use vocc::runtime::crc::crc32;
 use vocc::runtime::culler::{pvs_with_stats, BoxTree};
 use vocc::runtime::format::{encode_blob, encode_frame, CellRecord, Store};
 use vocc::runtime::{CellId, Frame};
@@ -408,7 +410,38 @@ pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
         records.push(rec);
     }
     let out = vocc::runtime::format::encode_store(&frame, &records)?;
+    // The shards' hashes, merged, so the merged store can serve `bake --reuse` (stale hashes are
+    // removed before the store is written; see `bake`).
+    let hashes: Option<Vec<CellHashes>> = shards
+        .iter()
+        .map(|p| {
+            let b = std::fs::read(hashes_path(p)).ok()?;
+            let h = CellHashes::decode(&b).ok()?;
+            (h.store_crc == crc32(&read_store(p).ok()?)).then_some(h)
+        })
+        .collect();
+    let merged = hashes.and_then(|h| CellHashes::merge(&h));
+    let hashes_file = hashes_path(output);
+    match std::fs::remove_file(&hashes_file) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(e).with_context(|| format!("cannot remove {}", hashes_file.display()))
+        }
+        _ => {}
+    }
     write_atomically(output, |w| w.write_all(&out))?;
+    match merged {
+        Some(h) => {
+            let h = CellHashes {
+                store_crc: crc32(&out),
+                ..h
+            };
+            write_atomically(&hashes_file, |w| w.write_all(&h.encode()))?;
+        }
+        None => eprintln!(
+            "note: not every shard has its own valid .hashes file, so {} gets none (a later `bake --reuse` of it bakes every cell)",
+            output.display()
+        ),
+    }
     let parts: Vec<String> = shards
         .iter()
         .zip(&from)
