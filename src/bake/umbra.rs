@@ -46,7 +46,36 @@
 //! pass every condition exactly; by convexity the whole segment then lies in the region.
 //! The exact verifier then checks every VO again, independently.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::{HashMap as StdHashMap, HashSet as StdHashSet};
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// The growth's caches are keyed by blocker ids and coordinate bits, which need no protection
+/// against crafted collisions: a multiply-rotate hash (as in rustc's FxHash) instead of SipHash.
+/// Iteration order never reaches the output (maps are looked up, sets only tested).
+#[derive(Default, Clone, Copy)]
+struct FastHasher(u64);
+
+impl Hasher for FastHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(w));
+        }
+    }
+    fn write_u32(&mut self, n: u32) {
+        self.write_u64(n as u64);
+    }
+    fn write_u64(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+type HashMap<K, V> = StdHashMap<K, V, BuildHasherDefault<FastHasher>>;
+type HashSet<K> = StdHashSet<K, BuildHasherDefault<FastHasher>>;
 
 use glam::DVec2;
 
@@ -204,6 +233,8 @@ struct Grower<'a> {
     common: HashMap<(u32, u32), Vec<DVec2>>,
     /// Blockers met by a ray, before the `usable` filter, keyed by the ray's end points' bits.
     rays: HashMap<[u64; 4], Vec<u32>>,
+    /// Candidate separating lines per blocker ([`Grower::separator_candidates`]).
+    separators: HashMap<u32, Vec<HalfPlane>>,
 }
 
 impl<'a> Grower<'a> {
@@ -337,6 +368,16 @@ impl<'a> Grower<'a> {
     /// A separating line between blocker `id` and the cell, with `q` strictly on the blocker's
     /// side, as a strict half-plane.
     fn separating(&mut self, id: u32, q: DVec2) -> Option<HalfPlane> {
+        if !self.separators.contains_key(&id) {
+            let c = self.separator_candidates(id);
+            self.separators.insert(id, c);
+        }
+        self.separators[&id].iter().copied().find(|h| h.holds(q))
+    }
+
+    /// The candidate separating lines of blocker `id` and the cell, in preference order: cell
+    /// edges and blocker edges with the other wholly on their right, then the crossing tangents.
+    fn separator_candidates(&mut self, id: u32) -> Vec<HalfPlane> {
         let (cell, b) = (self.cell, self.poly(id));
         let mut cands: Vec<HalfPlane> = Vec::new();
         for i in 0..cell.len() {
@@ -370,7 +411,7 @@ impl<'a> Grower<'a> {
                 strict: true,
             });
         }
-        cands.into_iter().find(|h| h.holds(q))
+        cands
     }
 
     /// VOs behind the chain, at several distances and in two orientations (facing the cell
@@ -542,7 +583,7 @@ impl<'a> Grower<'a> {
             steps: self.step_trace(&chain, Case::Seed).into_iter().collect(),
         };
         let mut bridges = [0usize; 2];
-        let mut tried: HashSet<(bool, u32, u32)> = HashSet::new();
+        let mut tried: HashSet<(bool, u32, u32)> = HashSet::default();
         while chain.len() < self.params.max_chain {
             let mut accepted = false;
             for (si, left) in [(0usize, true), (1usize, false)] {
@@ -707,10 +748,11 @@ fn grower<'a>(
         set,
         params,
         usable: near.iter().copied().collect(),
-        cell_tangents: HashMap::new(),
-        pair_tangents: HashMap::new(),
-        common: HashMap::new(),
-        rays: HashMap::new(),
+        cell_tangents: HashMap::default(),
+        pair_tangents: HashMap::default(),
+        common: HashMap::default(),
+        rays: HashMap::default(),
+        separators: HashMap::default(),
     }
 }
 
@@ -757,7 +799,7 @@ fn grow_usable(
     let seeds = seed::seeds(cell, set, near_sorted, params.seeds);
     let mut out = CellVos::default();
     let mut dense: Vec<Vo> = Vec::new();
-    let mut grown: HashSet<u32> = HashSet::new();
+    let mut grown: HashSet<u32> = HashSet::default();
     for s in seeds {
         // A seed already inside a grown cluster would grow the same cluster again.
         if grown.contains(&s) {
@@ -771,7 +813,7 @@ fn grow_usable(
         out.traces.push(trace);
     }
     // Identical segments from different chains count once.
-    let mut seen = HashSet::new();
+    let mut seen = HashSet::default();
     dense.retain(|v| {
         seen.insert((
             v.a.x.to_bits(),
