@@ -3,7 +3,7 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test demo bench eval lint fresh-clone pictures
+.PHONY: build test demo bench scale eval lint fresh-clone pictures
 
 build:
 	$(CARGO) build --release
@@ -22,6 +22,11 @@ demo:
 
 bench:
 	$(CARGO) bench --locked
+
+# The bake at scale: generated cities of 10^4, 10^5 and 10^6 buildings, end to end, with peak
+# memory (about 10 minutes on 2 cores; `cargo bench --bench scale` alone runs 10^4 and 10^5).
+scale:
+	VOCC_SCALE=10000,100000,1000000 $(CARGO) bench --locked --bench scale
 
 # Regenerates docs/RESULTS.md and docs/img/*.svg from the bundled data (several minutes).
 eval:
