@@ -44,7 +44,7 @@ fn child(buildings: usize, seed: u64) {
     let gen_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let s = scene::load(
-        &[path.clone()],
+        std::slice::from_ref(&path),
         &ReadOptions {
             height_attr: Some("height".into()),
             ..ReadOptions::default()
