@@ -30,15 +30,120 @@ pub struct BlockerSet {
     /// own object).
     pub objects: Vec<u32>,
     tree: RTree<GeomWithData<Rectangle<[f64; 2]>, u32>>,
+    /// The same boxes in a uniform grid, for the many small queries along rays.
+    grid: Buckets,
+}
+
+/// A uniform grid of buckets over boxes, compressed (bucket `k` holds
+/// `ids[start[k]..start[k + 1]]`). A box is listed in every bucket it touches, so a query box
+/// meets every box that meets it in at least one shared bucket (bucket indices are one monotone
+/// function of the coordinate for both).
+struct Buckets {
+    lo: DVec2,
+    size: f64,
+    nx: usize,
+    ny: usize,
+    start: Vec<u32>,
+    ids: Vec<u32>,
+    boxes: Vec<(DVec2, DVec2)>,
+}
+
+impl Buckets {
+    /// Side of a bucket, metres, unless the extent needs more buckets than [`Self::MAX_PER_BOX`]
+    /// per box.
+    const SIZE_M: f64 = 25.0;
+    const MAX_PER_BOX: usize = 8;
+
+    fn new(boxes: Vec<(DVec2, DVec2)>) -> Buckets {
+        let (lo, hi) = boxes.iter().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(l, h), b| (l.min(b.0), h.max(b.1)),
+        );
+        if boxes.is_empty() || !(lo.is_finite() && hi.is_finite()) {
+            return Buckets {
+                lo: DVec2::ZERO,
+                size: 1.0,
+                nx: 0,
+                ny: 0,
+                start: vec![0],
+                ids: Vec::new(),
+                boxes,
+            };
+        }
+        let ext = hi - lo;
+        let budget = (Self::MAX_PER_BOX * boxes.len()).max(1 << 12) as f64;
+        let size = Self::SIZE_M.max((ext.x * ext.y / budget).sqrt()).max(1e-9);
+        let nx = (ext.x / size) as usize + 1;
+        let ny = (ext.y / size) as usize + 1;
+        let mut g = Buckets {
+            lo,
+            size,
+            nx,
+            ny,
+            start: vec![0; nx * ny + 1],
+            ids: Vec::new(),
+            boxes,
+        };
+        for b in &g.boxes {
+            let (x0, y0, x1, y1) = g.range(b.0, b.1);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    g.start[y * nx + x + 1] += 1;
+                }
+            }
+        }
+        for k in 0..nx * ny {
+            g.start[k + 1] += g.start[k];
+        }
+        let mut fill = g.start.clone();
+        g.ids = vec![0; g.start[nx * ny] as usize];
+        for (i, b) in g.boxes.iter().enumerate() {
+            let (x0, y0, x1, y1) = g.range(b.0, b.1);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let k = y * nx + x;
+                    g.ids[fill[k] as usize] = i as u32;
+                    fill[k] += 1;
+                }
+            }
+        }
+        g
+    }
+
+    /// Bucket index ranges (inclusive) touched by the box `[lo, hi]`, clamped to the grid.
+    fn range(&self, lo: DVec2, hi: DVec2) -> (usize, usize, usize, usize) {
+        let ix = |v: f64, n: usize| (((v / self.size).floor().max(0.0)) as usize).min(n - 1);
+        let (a, b) = (lo - self.lo, hi - self.lo);
+        (ix(a.x, self.nx), ix(a.y, self.ny), ix(b.x, self.nx), ix(b.y, self.ny))
+    }
+
+    /// Calls `f` with every box id meeting `[lo, hi]`, possibly more than once.
+    fn each(&self, lo: DVec2, hi: DVec2, mut f: impl FnMut(u32)) {
+        if self.nx == 0 {
+            return;
+        }
+        let (x0, y0, x1, y1) = self.range(lo, hi);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let k = y * self.nx + x;
+                for &id in &self.ids[self.start[k] as usize..self.start[k + 1] as usize] {
+                    let (bl, bh) = self.boxes[id as usize];
+                    if bl.x <= hi.x && bh.x >= lo.x && bl.y <= hi.y && bh.y >= lo.y {
+                        f(id);
+                    }
+                }
+            }
+        }
+    }
 }
 
 impl BlockerSet {
     pub fn new(polys: Vec<Vec<DVec2>>, heights: Vec<f64>) -> Self {
-        let items = polys
+        let boxes: Vec<(DVec2, DVec2)> = polys.iter().map(|p| bounds(p)).collect();
+        let items = boxes
             .iter()
             .enumerate()
-            .map(|(i, p)| {
-                let (lo, hi) = bounds(p);
+            .map(|(i, (lo, hi))| {
                 GeomWithData::new(
                     Rectangle::from_corners(lo.to_array(), hi.to_array()),
                     i as u32,
@@ -50,6 +155,7 @@ impl BlockerSet {
             heights,
             objects: Vec::new(),
             tree: RTree::bulk_load(items),
+            grid: Buckets::new(boxes),
         }
     }
 
@@ -71,6 +177,12 @@ impl BlockerSet {
         self.tree
             .locate_in_envelope_intersecting(AABB::from_corners(lo.to_array(), hi.to_array()))
             .map(|g| g.data)
+    }
+
+    /// [`Self::in_box`] through the bucket grid, faster for small boxes: calls `f` with every
+    /// blocker whose bounding box meets `[lo, hi]`, possibly more than once, in no set order.
+    pub fn each_in_box(&self, lo: DVec2, hi: DVec2, f: impl FnMut(u32)) {
+        self.grid.each(lo, hi, f)
     }
 
     pub fn len(&self) -> usize {

@@ -511,11 +511,11 @@ impl<'a> Grower<'a> {
         for s in 0..steps {
             let p = a + d * (s as f64 * QUERY_STEP_M);
             let q = a + d * (((s + 1) as f64 * QUERY_STEP_M).min(self.params.search_m));
-            for id in self.set.in_box(p.min(q), p.max(q)) {
+            self.set.each_in_box(p.min(q), p.max(q), |id| {
                 if !out.contains(&id) && segment_meets_convex(a, end, self.poly(id)) {
                     out.push(id);
                 }
-            }
+            });
         }
         out
     }
