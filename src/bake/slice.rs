@@ -50,29 +50,27 @@ fn point_segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
 /// down; 0 when they may meet. For disjoint convex sets the least distance is between a vertex of
 /// one and an edge of the other.
 pub fn d_near(cell: &[DVec2], q: &[DVec2]) -> f64 {
-    let edges = |p: &[DVec2]| -> Vec<(DVec2, DVec2)> {
-        if p.len() == 2 {
-            vec![(p[0], p[1])]
-        } else {
-            (0..p.len()).map(|i| (p[i], p[(i + 1) % p.len()])).collect()
-        }
-    };
-    let (ce, qe) = (edges(cell), edges(q));
+    // The edges of a polygon, or the one edge of a segment (no allocation: this runs for every
+    // blocker near every cell).
+    fn edges(p: &[DVec2]) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+        let n = if p.len() == 2 { 1 } else { p.len() };
+        (0..n).map(move |i| (p[i], p[(i + 1) % p.len()]))
+    }
     let mut m = f64::INFINITY;
     for &v in q {
-        for &(a, b) in &ce {
+        for (a, b) in edges(cell) {
             m = m.min(point_segment_distance(v, a, b));
         }
     }
     for &v in cell {
-        for &(a, b) in &qe {
+        for (a, b) in edges(q) {
             m = m.min(point_segment_distance(v, a, b));
         }
     }
     // Segments that cross have no vertex–edge pair at distance 0; callers only pass sets whose
     // interiors are disjoint, and a crossing would make rule 2 fail anyway, but stay safe.
-    for &(a, b) in &qe {
-        for &(c, d) in &ce {
+    for (a, b) in edges(q) {
+        for (c, d) in edges(cell) {
             if segments_may_cross(a, b, c, d) {
                 return 0.0;
             }
