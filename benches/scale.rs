@@ -1,6 +1,7 @@
 //! The bake at scale (issue 6): generated cities of 10^4 and 10^5 buildings (and 10^6 when asked)
 //! baked end to end on 100 m cells with every core: generate, write GeoJSON, load, bake, encode.
 //!
+//! The hashes `vocc bake` writes beside the store (for incremental rebakes) are timed apart.
 //! Input: `VOCC_SCALE` (comma-separated building counts; default `10000,100000`), `VOCC_SEED`
 //! (default 1). `cargo bench --bench scale`; `make scale` runs 10^4 to 10^6.
 //! Output: one table row per size: cells, stage times, core-ms per cell, peak memory, store size;
@@ -13,6 +14,7 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
 
+use vocc::bake::incremental::CellHashes;
 use vocc::bake::pipeline::{bake_cells, encode, BakeParams, Plan};
 use vocc::scene::gencity::{generate, write_geojson, CityParams};
 use vocc::scene::{self, ReadOptions};
@@ -58,15 +60,20 @@ fn child(buildings: usize, seed: u64) {
     let baked = bake_cells(&plan, &cells, &|_| {});
     let bytes = encode(&plan.frame, &baked).unwrap();
     let bake_s = t.elapsed().as_secs_f64();
+    // What `vocc bake` adds: the content hashes for a later incremental rebake.
+    let t = Instant::now();
+    let hashes = CellHashes::new(&plan, &cells).encode();
+    let hash_s = t.elapsed().as_secs_f64();
     let _ = std::fs::remove_file(&path);
     let threads = rayon::current_num_threads();
     let mut ms: Vec<f64> = baked.iter().map(|c| c.stats.ms).collect();
     ms.sort_by(f64::total_cmp);
     let vos: usize = baked.iter().map(|c| c.record.vos().len()).sum();
     println!(
-        "{{\"buildings\":{buildings},\"blockers\":{},\"cells\":{},\"threads\":{threads},\"gen_s\":{gen_s:.2},\"load_s\":{load_s:.2},\"bake_s\":{bake_s:.2},\"core_ms_per_cell\":{:.2},\"median_ms\":{:.2},\"vos\":{vos},\"bytes\":{},\"peak_mib\":{:.0}}}",
+        "{{\"buildings\":{buildings},\"blockers\":{},\"cells\":{},\"threads\":{threads},\"gen_s\":{gen_s:.2},\"load_s\":{load_s:.2},\"bake_s\":{bake_s:.2},\"hash_s\":{hash_s:.2},\"hash_bytes\":{},\"core_ms_per_cell\":{:.2},\"median_ms\":{:.2},\"vos\":{vos},\"bytes\":{},\"peak_mib\":{:.0}}}",
         s.blockers.len(),
         cells.len(),
+        hashes.len(),
         bake_s * 1e3 * threads as f64 / cells.len().max(1) as f64,
         ms.get(ms.len() / 2).copied().unwrap_or(0.0),
         bytes.len(),
@@ -95,13 +102,14 @@ fn main() {
     let log = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/scale.jsonl");
     println!("generated city, 100 m cells, seed {seed}; each size in its own process");
     println!(
-        "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>13} {:>10} {:>6} {:>9} {:>9}",
+        "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>7} {:>13} {:>10} {:>6} {:>9} {:>9}",
         "buildings",
         "blockers",
         "cells",
         "gen s",
         "load s",
         "bake s",
+        "hash s",
         "core-ms/cell",
         "median ms",
         "VOs",
@@ -125,13 +133,14 @@ fn main() {
             .to_string();
         let v: serde_json::Value = serde_json::from_str(&line).unwrap();
         println!(
-            "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>13} {:>10} {:>6} {:>9} {:>9}",
+            "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>7} {:>13} {:>10} {:>6} {:>9} {:>9}",
             v["buildings"].to_string(),
             v["blockers"].to_string(),
             v["cells"].to_string(),
             v["gen_s"].to_string(),
             v["load_s"].to_string(),
             v["bake_s"].to_string(),
+            v["hash_s"].to_string(),
             v["core_ms_per_cell"].to_string(),
             v["median_ms"].to_string(),
             v["vos"].to_string(),
