@@ -1,6 +1,7 @@
 //! The bake end to end, checked from the store's bytes: every stored VO, decoded as an engine
 //! decodes it, passes rule 2 and rule 1 (the exact verifier, and a brute-force ray oracle that
-//! shares no code with it); the bytes do not depend on the thread count.
+//! shares no code with it), with and without spines; the bytes do not depend on the thread
+//! count.
 
 mod common;
 
@@ -42,4 +43,20 @@ fn stored_vos_pass_rule_2_and_rule_1_from_their_bytes() {
 fn store_bytes_do_not_depend_on_the_thread_count() {
     let s = load_lyon();
     assert_eq!(store_bytes(&s, 1), store_bytes(&s, 2));
+}
+
+#[test]
+fn stored_vos_with_spines_pass_rule_2_and_rule_1_from_their_bytes() {
+    let s = load_lyon();
+    let params = BakeParams {
+        region: Some(region(&s)),
+        spines: 64,
+        ..BakeParams::default()
+    };
+    let baked = bake(&s, params, None);
+    assert_ne!(baked.bytes, store_bytes(&s, 2), "spines changed nothing");
+    let store = Store::parse(&baked.bytes).expect("the bake writes a valid store");
+    let (cells_with_vos, checked) = check_stored_vos(&s, &store);
+    assert!(cells_with_vos >= 6, "only {cells_with_vos} cells got VOs");
+    assert!(checked >= 30, "only {checked} VOs checked");
 }

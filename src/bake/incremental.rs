@@ -109,7 +109,13 @@ impl CellHashes {
         // Every option but the cell selection (region, walkable area), which the zero hash of an
         // unbaked cell records.
         let p = plan.params();
-        g.bytes(format!("{:?}", (p.cell_size, p.eye, p.slices, p.max_vos, &p.grow)).as_bytes());
+        g.bytes(
+            format!(
+                "{:?}",
+                (p.cell_size, p.eye, p.slices, p.max_vos, &p.grow, p.spines)
+            )
+            .as_bytes(),
+        );
         g.bytes(&encode_frame(&plan.frame));
         // One hash per object: its box, cost and blockers (blockers are grouped by object).
         let mut object = vec![Mix::new(2); scene.objects.len()];

@@ -2,7 +2,8 @@
 //!
 //! Stages, in pipeline order: [`slice`] (slice heights and rule 2), [`seed`] (which blockers
 //! start a cluster), [`umbra`] (aggregate umbrae grown from a seed, and the dense set of 2D
-//! virtual occluders behind them), [`decimate`] (the few most effective), [`quantize`] (5 bytes,
+//! virtual occluders behind them), [`spine`] (optional: VOs through blocks of touching buildings),
+//! [`decimate`] (the few most effective), [`quantize`] (5 bytes,
 //! conservatively). [`pipeline`] orchestrates them per cell and over cells; [`svg`] draws one
 //! cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
 //! dequantized form; a VO that fails is shrunk or dropped and counted.
@@ -13,6 +14,7 @@ pub mod pipeline;
 pub mod quantize;
 pub mod seed;
 pub mod slice;
+pub mod spine;
 pub mod svg;
 pub mod umbra;
 
@@ -114,7 +116,12 @@ impl Buckets {
     fn range(&self, lo: DVec2, hi: DVec2) -> (usize, usize, usize, usize) {
         let ix = |v: f64, n: usize| (((v / self.size).floor().max(0.0)) as usize).min(n - 1);
         let (a, b) = (lo - self.lo, hi - self.lo);
-        (ix(a.x, self.nx), ix(a.y, self.ny), ix(b.x, self.nx), ix(b.y, self.ny))
+        (
+            ix(a.x, self.nx),
+            ix(a.y, self.ny),
+            ix(b.x, self.nx),
+            ix(b.y, self.ny),
+        )
     }
 
     /// Calls `f` with every box id meeting `[lo, hi]`, possibly more than once.

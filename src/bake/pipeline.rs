@@ -21,6 +21,7 @@ use super::decimate::{greedy, Occludees};
 use super::quantize::{clip, quantize, window, Refused};
 use super::seed::area_angle;
 use super::slice::{choose_levels, d_near, Support};
+use super::spine;
 use super::umbra::{self, CellGrower, GrowParams};
 use super::BlockerSet;
 use crate::geom::predicates::{point_in_convex, Containment};
@@ -66,6 +67,8 @@ pub struct BakeParams {
     /// Bake only the cells meeting this walkable area (outer rings, local frame).
     pub walkable: Option<crate::scene::walkable::Area>,
     pub grow: GrowParams,
+    /// Blockers (largest area-angle first) that start a spine ([`super::spine`]); 0: none.
+    pub spines: usize,
 }
 
 impl Default for BakeParams {
@@ -81,6 +84,7 @@ impl Default for BakeParams {
                 verify: false,
                 ..GrowParams::default()
             },
+            spines: 0,
         }
     }
 }
@@ -369,6 +373,46 @@ impl<'s> Plan<'s> {
             let step = DVec2::splat(f.quantum);
             (lo + step, hi - step)
         };
+        // A proposed VO `a`–`b` certified by the blockers `chain`: clipped to the window, given
+        // its own level, weighed by what it hides; kept if it hides anything.
+        let consider = |a: DVec2,
+                        b: DVec2,
+                        chain: &[u32],
+                        cands: &mut Vec<(u8, DVec2, DVec2)>,
+                        hidden: &mut Vec<Vec<u32>>| {
+            // Only the part inside the quantization window (less a grid step) can be stored.
+            let Some((a, b)) = clip(a, b, win.0, win.1) else {
+                return;
+            };
+            if a.distance(b) < 2.0 * f.quantum {
+                return;
+            }
+            // The VO's own level: the highest at which every blocker of the chain that
+            // certified it supports it by rule 2 (at least the slice's, usually).
+            let dn = d_near(&cell, &[a, b]);
+            let chain: Vec<&Support> = chain
+                .iter()
+                .filter_map(|id| near.binary_search(id).ok().map(|p| &support[p]))
+                .collect();
+            let Some(level) = (1..HEIGHT_LEVELS).rev().find(|&l| {
+                chain
+                    .iter()
+                    .all(|s| s.supports(e0, e1, g, levels[l as usize], dn))
+            }) else {
+                return;
+            };
+            let geom = crate::runtime::frame::VoGeom {
+                a: a.to_array(),
+                b: b.to_array(),
+                g,
+                h: levels[level as usize],
+            };
+            let h = self.occludees.hidden(&view, &geom, radius);
+            if !h.is_empty() {
+                cands.push((level, a, b));
+                hidden.push(h);
+            }
+        };
         let mut previous: Option<Vec<u32>> = None;
         for &k in &stats.levels {
             let ids: Vec<u32> = near
@@ -384,41 +428,21 @@ impl<'s> Plan<'s> {
             }
             let dense = grower.grow(&ids);
             previous = Some(ids);
-            for mut v in dense.vos {
-                // Only the part inside the quantization window (less a grid step) can be stored.
-                let Some((a, b)) = clip(v.a, v.b, win.0, win.1) else {
-                    continue;
-                };
-                if a.distance(b) < 2.0 * f.quantum {
-                    continue;
-                }
-                (v.a, v.b) = (a, b);
-                // The VO's own level: the highest at which every blocker of the chain that
-                // certified it supports it by rule 2 (at least the slice's, usually).
-                let dn = d_near(&cell, &[v.a, v.b]);
-                let chain: Vec<&Support> = v
-                    .chain
-                    .iter()
-                    .filter_map(|id| near.binary_search(id).ok().map(|p| &support[p]))
-                    .collect();
-                let Some(level) = (1..HEIGHT_LEVELS).rev().find(|&l| {
-                    chain
-                        .iter()
-                        .all(|s| s.supports(e0, e1, g, levels[l as usize], dn))
-                }) else {
-                    continue;
-                };
-                let geom = crate::runtime::frame::VoGeom {
-                    a: v.a.to_array(),
-                    b: v.b.to_array(),
-                    g,
-                    h: levels[level as usize],
-                };
-                let h = self.occludees.hidden(&view, &geom, radius);
-                if !h.is_empty() {
-                    cands.push((level, v.a, v.b));
-                    hidden.push(h);
-                }
+            for v in dense.vos {
+                consider(v.a, v.b, &v.chain, &mut cands, &mut hidden);
+            }
+        }
+        // Spines through blocks of touching blockers, from the blockers of largest area-angle.
+        if self.params.spines > 0 {
+            let mut starts: Vec<usize> = (0..near.len()).collect();
+            starts.sort_by(|&x, &y| adjusted[y].1.total_cmp(&adjusted[x].1).then(x.cmp(&y)));
+            let starts: Vec<u32> = starts
+                .into_iter()
+                .take(self.params.spines)
+                .map(|k| near[k])
+                .collect();
+            for sp in spine::spines(&self.set, &near, centre, &starts) {
+                consider(sp.a, sp.b, &sp.chain, &mut cands, &mut hidden);
             }
         }
         stats.dense = cands.len();

@@ -65,6 +65,11 @@ pub struct BakeArgs {
     /// the rest. The output is byte-identical to a full bake.
     #[arg(long, value_name = "OLD_STORE")]
     pub reuse: Option<PathBuf>,
+    /// Also propose VOs running through blocks of touching buildings, from this many blockers
+    /// per cell (largest area-angle first); 0: none. On Lyon, 64 culls about half again as many
+    /// objects for about four times the bake time (docs/RESULTS.md).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub spines: usize,
 }
 
 fn parse_range(s: &str) -> Result<(f64, f64), String> {
@@ -205,6 +210,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         eye: a.eye,
         slices: a.slices,
         max_vos: a.max_vos,
+        spines: a.spines,
         region,
         ..BakeParams::default()
     };

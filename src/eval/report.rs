@@ -18,6 +18,7 @@ use crate::runtime::format::{encode_store, CellRecord, Store};
 use crate::runtime::CellId;
 use crate::scene::{self, ReadOptions, Scene};
 
+use super::bound::{hidden_2d, BoundParams};
 use super::metrics::{
     cell_vs, compare, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
     vo_rays_all, CellEval, Summary,
@@ -129,6 +130,9 @@ fn row(out: &mut String, label: &str, s: &Summary, extra: &str) {
 
 const HEAD: &str = "| variant | cells | false culls | PVS/VS objects (median) | PVS/VS triangles (median) | objects culled (mean) | triangles culled (mean) | mean VS | mean PVS |";
 const RULE: &str = "|---|---|---|---|---|---|---|---|---|";
+
+/// Spine starts for the spines variant.
+const SPINES: usize = 64;
 
 /// Runs the suite on one dataset; writes plots into `img` and returns its Markdown section.
 pub fn dataset_section(
@@ -274,7 +278,7 @@ pub fn dataset_section(
         sample.len(),
         p.seed
     );
-    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings (chains never leave one object: no fusion); quantization off evaluates each stored VO's unquantized segment by rule 3. Machine: {}.\n", machine());
+    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings (chains never leave one object: no fusion); `--spines {SPINES}` adds VOs through blocks of touching buildings; quantization off evaluates each stored VO's unquantized segment by rule 3. The 2D fusion bound is no bake: it counts as culled every object whose sampled footprint points are cut off, in 2D, from {} points of the cell's boundary by the blockers outside the cell, heights ignored; no VO set of the cell can cull an object outside it, and its \"false culls\" are objects seen over roofs, which heights keep VOs from culling (`src/eval/bound.rs`). Machine: {}.\n", BoundParams::default().cell_points, machine());
     let _ = writeln!(md, "{HEAD} bake ms/cell (median) |\n{RULE}---|");
     let mut speed: Vec<(String, f64, f64)> = Vec::new();
     let sample_main: Vec<CellEval> = eval_cells(&s, &store, &tree, &sample, &vs_sample);
@@ -306,6 +310,48 @@ pub fn dataset_section(
         "single buildings, no fusion",
         &sb,
         &format!(" {:.1} |", bake_ms(&base.cells).0),
+    );
+
+    progress(&format!("{}: spines", d.name));
+    let sp = bake(
+        &s,
+        BakeParams {
+            spines: SPINES,
+            ..BakeParams::default()
+        },
+        Some(&sample),
+    );
+    let sp_store = Store::parse(&sp.bytes).expect("valid store");
+    let ssp = summarize(&s, &eval_cells(&s, &sp_store, &tree, &sample, &vs_sample));
+    row(
+        &mut md,
+        &format!("with spines (`--spines {SPINES}`)"),
+        &ssp,
+        &format!(" {:.1} |", bake_ms(&sp.cells).0),
+    );
+    speed.push(("spines".into(), bake_ms(&sp.cells).0, ssp.median_ratio));
+
+    // The 2D fusion bound: what occluders from the blockers outside each cell could cull at
+    // most, heights ignored (eval::bound), as a PVS against the same VS.
+    progress(&format!("{}: 2D fusion bound", d.name));
+    let bound: Vec<CellEval> = sample
+        .iter()
+        .zip(&vs_sample)
+        .map(|(&id, vs)| {
+            let r = store.frame().grid.cell_rect(id).expect("in grid");
+            let hidden = hidden_2d(&s, r, &BoundParams::default());
+            let pvs: Vec<u32> = (0..s.objects.len() as u32)
+                .filter(|i| hidden.binary_search(i).is_err())
+                .collect();
+            compare(&s, id, 0, vs, &pvs)
+        })
+        .collect();
+    let sbound = summarize(&s, &bound);
+    row(
+        &mut md,
+        "2D fusion bound (estimate; not conservative)",
+        &sbound,
+        " – |",
     );
 
     // Quantization off.
