@@ -60,3 +60,19 @@ fn stored_vos_with_spines_pass_rule_2_and_rule_1_from_their_bytes() {
     assert!(cells_with_vos >= 6, "only {cells_with_vos} cells got VOs");
     assert!(checked >= 30, "only {checked} VOs checked");
 }
+
+#[test]
+fn stored_vos_with_scan_runs_pass_rule_2_and_rule_1_from_their_bytes() {
+    let s = load_lyon();
+    let params = BakeParams {
+        region: Some(region(&s)),
+        scan: true,
+        ..BakeParams::default()
+    };
+    let baked = bake(&s, params, None);
+    assert_ne!(baked.bytes, store_bytes(&s, 2), "the scan changed nothing");
+    let store = Store::parse(&baked.bytes).expect("the bake writes a valid store");
+    let (cells_with_vos, checked) = check_stored_vos(&s, &store);
+    assert!(cells_with_vos >= 6, "only {cells_with_vos} cells got VOs");
+    assert!(checked >= 30, "only {checked} VOs checked");
+}

@@ -112,7 +112,15 @@ impl CellHashes {
         g.bytes(
             format!(
                 "{:?}",
-                (p.cell_size, p.eye, p.slices, p.max_vos, &p.grow, p.spines)
+                (
+                    p.cell_size,
+                    p.eye,
+                    p.slices,
+                    p.max_vos,
+                    &p.grow,
+                    p.spines,
+                    p.scan
+                )
             )
             .as_bytes(),
         );

@@ -2,7 +2,8 @@
 //!
 //! Stages, in pipeline order: [`slice`] (slice heights and rule 2), [`seed`] (which blockers
 //! start a cluster), [`umbra`] (aggregate umbrae grown from a seed, and the dense set of 2D
-//! virtual occluders behind them), [`spine`] (optional: VOs through blocks of touching buildings),
+//! virtual occluders behind them), [`spine`] and [`scan`] (optional: VOs through blocks of touching
+//! buildings; long hidden runs of lines around the cell),
 //! [`decimate`] (the few most effective), [`quantize`] (5 bytes,
 //! conservatively). [`pipeline`] orchestrates them per cell and over cells; [`svg`] draws one
 //! cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
@@ -12,6 +13,7 @@ pub mod decimate;
 pub mod incremental;
 pub mod pipeline;
 pub mod quantize;
+pub mod scan;
 pub mod seed;
 pub mod slice;
 pub mod spine;

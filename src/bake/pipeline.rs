@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 use super::decimate::{greedy, Occludees};
 use super::quantize::{clip, quantize, window, Refused};
+use super::scan;
 use super::seed::area_angle;
 use super::slice::{choose_levels, d_near, Support};
 use super::spine;
@@ -69,6 +70,8 @@ pub struct BakeParams {
     pub grow: GrowParams,
     /// Blockers (largest area-angle first) that start a spine ([`super::spine`]); 0: none.
     pub spines: usize,
+    /// Propose the hidden runs of scan lines around the cell ([`super::scan`]).
+    pub scan: bool,
 }
 
 impl Default for BakeParams {
@@ -85,6 +88,7 @@ impl Default for BakeParams {
                 ..GrowParams::default()
             },
             spines: 0,
+            scan: false,
         }
     }
 }
@@ -443,6 +447,13 @@ impl<'s> Plan<'s> {
                 .collect();
             for sp in spine::spines(&self.set, &near, centre, &starts) {
                 consider(sp.a, sp.b, &sp.chain, &mut cands, &mut hidden);
+            }
+        }
+        if self.params.scan {
+            let size = f.grid.cell_size;
+            let ds: Vec<f64> = scan::DISTANCES.iter().map(|k| k * size).collect();
+            for r in scan::runs(&self.set, &near, &cell, &ds, scan::HALF_LENGTH * size) {
+                consider(r.a, r.b, &r.chain, &mut cands, &mut hidden);
             }
         }
         stats.dense = cands.len();

@@ -278,7 +278,7 @@ pub fn dataset_section(
         sample.len(),
         p.seed
     );
-    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings (chains never leave one object: no fusion); `--spines {SPINES}` adds VOs through blocks of touching buildings; quantization off evaluates each stored VO's unquantized segment by rule 3. The 2D fusion bound is no bake: it counts as culled every object whose sampled footprint points are cut off, in 2D, from {} points of the cell's boundary by the blockers outside the cell, heights ignored; no VO set of the cell can cull an object outside it, and its \"false culls\" are objects seen over roofs, which heights keep VOs from culling (`src/eval/bound.rs`). Machine: {}.\n", BoundParams::default().cell_points, machine());
+    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings (chains never leave one object: no fusion); `--spines {SPINES}` adds VOs through blocks of touching buildings; `--scan` adds the long hidden runs of lines around each cell; quantization off evaluates each stored VO's unquantized segment by rule 3. The 2D fusion bound is no bake: it counts as culled every object whose sampled footprint points are cut off, in 2D, from {} points of the cell's boundary by the blockers outside the cell, heights ignored; no VO set of the cell can cull an object outside it, and its \"false culls\" are objects seen over roofs, which heights keep VOs from culling (`src/eval/bound.rs`). Machine: {}.\n", BoundParams::default().cell_points, machine());
     let _ = writeln!(md, "{HEAD} bake ms/cell (median) |\n{RULE}---|");
     let mut speed: Vec<(String, f64, f64)> = Vec::new();
     let sample_main: Vec<CellEval> = eval_cells(&s, &store, &tree, &sample, &vs_sample);
@@ -330,6 +330,25 @@ pub fn dataset_section(
         &format!(" {:.1} |", bake_ms(&sp.cells).0),
     );
     speed.push(("spines".into(), bake_ms(&sp.cells).0, ssp.median_ratio));
+
+    progress(&format!("{}: scan runs", d.name));
+    let sc = bake(
+        &s,
+        BakeParams {
+            scan: true,
+            ..BakeParams::default()
+        },
+        Some(&sample),
+    );
+    let sc_store = Store::parse(&sc.bytes).expect("valid store");
+    let ssc = summarize(&s, &eval_cells(&s, &sc_store, &tree, &sample, &vs_sample));
+    row(
+        &mut md,
+        "with scan runs (`--scan`)",
+        &ssc,
+        &format!(" {:.1} |", bake_ms(&sc.cells).0),
+    );
+    speed.push(("scan".into(), bake_ms(&sc.cells).0, ssc.median_ratio));
 
     // The 2D fusion bound: what occluders from the blockers outside each cell could cull at
     // most, heights ignored (eval::bound), as a PVS against the same VS.
