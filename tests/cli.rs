@@ -409,6 +409,13 @@ fn four_shards_in_four_processes_merge_into_the_single_bake() {
     );
     assert!(s.len() > 136, "the single bake stored something");
     assert_eq!(m, s, "merged shards differ from the single bake");
+    // The shards' content hashes merge into the single bake's, so `--reuse` works on the merge.
+    let hashes = |f: &std::path::Path| std::fs::read(vocc::bake::incremental::hashes_path(f));
+    assert_eq!(
+        hashes(&merged).expect("merge writes hashes"),
+        hashes(&single).unwrap(),
+        "merged hashes differ from the single bake's"
+    );
     // A shard of another bake (other cell size) is refused.
     let other = dir.join("other.vocc");
     let mut a = common_args(&other);
