@@ -71,7 +71,7 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 0, value_name = "N")]
     pub spines: usize,
     /// Also propose VOs from the long hidden runs of lines around each cell, across blocks and
-    /// hidden streets. On Lyon it culls about four times as many objects, for about fifteen times
+    /// hidden streets. On Lyon it culls four to six times as many objects, for roughly ten times
     /// the bake time (docs/RESULTS.md).
     #[arg(long)]
     pub scan: bool,
