@@ -1,6 +1,7 @@
 //! Loading: files in, a local-frame scene with blockers out.
 //!
-//! Input: file paths in order, and reader options. Output: a [`Scene`].
+//! Input: file paths in order (or `(path, bytes)` pairs already in memory: [`load_bytes`]), and
+//! reader options. Output: a [`Scene`].
 //! Stages, each timed: read (format detection and parsing), localize (one origin for the whole
 //! scene: the bounding-box minimum rounded down to 1 km, then subtraction in f64), footprints
 //! (ring repair and convex decomposition), meshes (solid extraction).
@@ -25,9 +26,19 @@ pub const ORIGIN_SNAP_M: f64 = 1000.0;
 
 /// Reads one file, choosing the reader from its extension and content.
 pub fn read_file(path: &Path, opts: &ReadOptions) -> Result<(FileRead, &'static str), LoadError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| LoadError::new(path, Location::File, LoadErrorKind::Io(e.to_string())))?;
+    read_bytes(path, &bytes, opts)
+}
+
+/// Reads one file's bytes, choosing the reader from the extension of `path` and the content;
+/// `path` is used for that choice and for error messages only (nothing is opened).
+pub fn read_bytes(
+    path: &Path,
+    bytes: &[u8],
+    opts: &ReadOptions,
+) -> Result<(FileRead, &'static str), LoadError> {
     let err = |location, kind| LoadError::new(path, location, kind);
-    let bytes =
-        std::fs::read(path).map_err(|e| err(Location::File, LoadErrorKind::Io(e.to_string())))?;
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(err(Location::File, LoadErrorKind::Empty));
     }
@@ -37,27 +48,50 @@ pub fn read_file(path: &Path, opts: &ReadOptions) -> Result<(FileRead, &'static 
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     if ext == "obj" {
-        return Ok((obj::read_obj(path, &bytes, opts)?, "OBJ"));
+        return Ok((obj::read_obj(path, bytes, opts)?, "OBJ"));
     }
     if !matches!(ext.as_str(), "json" | "geojson" | "cityjson") {
         return Err(err(Location::File, LoadErrorKind::UnknownFormat));
     }
-    json::read_json(path, &bytes, opts)
+    json::read_json(path, bytes, opts)
 }
 
 /// Loads files into one scene.
 pub fn load(paths: &[PathBuf], opts: &ReadOptions) -> Result<Scene, LoadError> {
-    let mut report = SceneReport::default();
     let t = Instant::now();
     let reads: Vec<(FileRead, &'static str)> = paths
         .par_iter()
         .map(|p| read_file(p, opts))
         .collect::<Result<_, _>>()?;
-    report.timings.push(("read", t.elapsed().as_secs_f64()));
+    build_scene(paths.to_vec(), reads, t.elapsed().as_secs_f64())
+}
+
+/// [`load`] from bytes already in memory: `(path, bytes)` per file, in order. Each path chooses
+/// the reader by its extension and names the file in errors and in [`Scene::files`]; nothing is
+/// opened. The same stages run as in [`load`] (read, localize, footprint repair and convex
+/// decomposition, solid extraction).
+pub fn load_bytes(files: &[(PathBuf, &[u8])], opts: &ReadOptions) -> Result<Scene, LoadError> {
+    let t = Instant::now();
+    let reads: Vec<(FileRead, &'static str)> = files
+        .par_iter()
+        .map(|(p, b)| read_bytes(p, b, opts))
+        .collect::<Result<_, _>>()?;
+    let paths = files.iter().map(|(p, _)| p.clone()).collect();
+    build_scene(paths, reads, t.elapsed().as_secs_f64())
+}
+
+/// Everything after reading: the local frame, then per-object repair, decomposition and solids.
+fn build_scene(
+    paths: Vec<PathBuf>,
+    reads: Vec<(FileRead, &'static str)>,
+    read_secs: f64,
+) -> Result<Scene, LoadError> {
+    let mut report = SceneReport::default();
+    report.timings.push(("read", read_secs));
 
     let t = Instant::now();
     let mut raw: Vec<(u32, RawObject)> = Vec::new();
-    for (fi, ((read, format), path)) in reads.into_iter().zip(paths).enumerate() {
+    for (fi, ((read, format), path)) in reads.into_iter().zip(&paths).enumerate() {
         report.files.push(FileStats {
             path: path.clone(),
             format,
@@ -112,7 +146,7 @@ pub fn load(paths: &[PathBuf], opts: &ReadOptions) -> Result<Scene, LoadError> {
     }
     Ok(Scene {
         origin,
-        files: paths.to_vec(),
+        files: paths,
         objects,
         blockers,
         report,

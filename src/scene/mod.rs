@@ -31,7 +31,7 @@ use std::path::PathBuf;
 use glam::{DVec2, DVec3};
 
 pub use error::{LoadError, LoadErrorKind, Location};
-pub use load::load;
+pub use load::{load, load_bytes};
 
 /// Options shared by the readers.
 #[derive(Clone, Debug)]

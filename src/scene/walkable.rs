@@ -20,10 +20,15 @@ pub type Area = Vec<Vec<DVec2>>;
 
 /// Reads the walkable area of `path`; `origin` is the scene's local origin.
 pub fn read(path: &Path, origin: DVec3) -> Result<Area, LoadError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| LoadError::new(path, Location::File, LoadErrorKind::Io(e.to_string())))?;
+    read_bytes(path, &bytes, origin)
+}
+
+/// [`read`] from bytes in memory; `path` names the file in errors only.
+pub fn read_bytes(path: &Path, bytes: &[u8], origin: DVec3) -> Result<Area, LoadError> {
     let err = |loc: Location, kind: LoadErrorKind| LoadError::new(path, loc, kind);
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| err(Location::File, LoadErrorKind::Io(e.to_string())))?;
-    let v: Value = serde_json::from_str(&text).map_err(|e| {
+    let v: Value = serde_json::from_slice(bytes).map_err(|e| {
         err(
             Location::Line {
                 line: e.line(),
