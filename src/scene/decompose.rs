@@ -58,19 +58,36 @@ pub fn convex_pieces(rings: &[Ring]) -> Result<Vec<Vec<DVec2>>, DecomposeError> 
     }
     let inside = classify_faces(&cdt);
 
-    // One piece per inside triangle, as a counter-clockwise cycle of vertex indices.
+    // One piece per inside triangle: three half-edges `3f + k` from its vertex k to vertex
+    // k + 1 (counter-clockwise), linked in a cycle. Merging two pieces across a diagonal
+    // relinks four half-edges, so the whole merge is linear in the number of triangles (copying
+    // vertex lists made a piece of m vertices cost O(m) per merge: quadratic for a polygon of
+    // 10^6 vertices).
     let nf = cdt.num_all_faces();
     let mut piece_of: Vec<usize> = (0..nf).collect();
-    let mut cycles: Vec<Vec<usize>> = vec![Vec::new(); nf];
+    let mut from: Vec<usize> = vec![usize::MAX; 3 * nf];
+    let mut next: Vec<usize> = (0..3 * nf).collect();
+    let mut prev: Vec<usize> = (0..3 * nf).collect();
+    // A live half-edge of each piece, where its vertex cycle starts.
+    let mut start: Vec<usize> = (0..nf).map(|f| 3 * f).collect();
     for f in cdt.inner_faces() {
-        if inside[f.fix().index()] {
-            cycles[f.fix().index()] = f.vertices().iter().map(|v| v.fix().index()).collect();
+        let fi = f.fix().index();
+        if inside[fi] {
+            for (k, v) in f.vertices().iter().enumerate() {
+                from[3 * fi + k] = v.fix().index();
+                next[3 * fi + k] = 3 * fi + (k + 1) % 3;
+                prev[3 * fi + k] = 3 * fi + (k + 2) % 3;
+            }
         }
     }
     let pos: Vec<DVec2> = cdt
         .vertices()
         .map(|v| DVec2::new(v.position().x, v.position().y))
         .collect();
+    // The half-edge u -> v of inside triangle f.
+    let half_edge = |from: &[usize], f: usize, u: usize, v: usize| {
+        (3 * f..3 * f + 3).find(|&h| from[h] == u && from[3 * f + (h - 3 * f + 1) % 3] == v)
+    };
 
     // Diagonals: unconstrained edges with an inside triangle on both sides.
     let mut diagonals: Vec<(f64, usize, usize, usize, usize)> = Vec::new();
@@ -106,18 +123,45 @@ pub fn convex_pieces(rings: &[Ring]) -> Result<Vec<Vec<DVec2>>, DecomposeError> 
         if pa == pb {
             continue;
         }
-        // `fa` lies left of u->v, so its piece runs u->v; the other piece runs v->u.
-        if let Some(merged) = try_merge(&cycles[pa], &cycles[pb], u, v, &pos) {
-            cycles[pa] = merged;
-            cycles[pb] = Vec::new();
-            piece_of[pb] = pa;
+        // `fa` lies left of u->v, so its piece runs u->v; the other piece runs v->u. Each
+        // half-edge of a diagonal stays in its piece until that diagonal is removed.
+        let (Some(h1), Some(h2)) = (half_edge(&from, fa, u, v), half_edge(&from, fb, v, u)) else {
+            continue;
+        };
+        let (p1, n1, p2, n2) = (prev[h1], next[h1], prev[h2], next[h2]);
+        let to = |h: usize| from[next[h]];
+        // Around u the merged piece runs a_prev -> u -> b_next; around v, b_prev -> v -> a_next.
+        let (a_prev, a_next, b_prev, b_next) = (from[p1], to(n1), from[p2], to(n2));
+        if a_prev == b_next || b_prev == a_next {
+            continue;
         }
+        if orient(pos[a_prev], pos[u], pos[b_next]) == Orientation::Cw
+            || orient(pos[b_prev], pos[v], pos[a_next]) == Orientation::Cw
+        {
+            continue;
+        }
+        next[p1] = n2;
+        prev[n2] = p1;
+        next[p2] = n1;
+        prev[n1] = p2;
+        // The merged cycle starts at v: v, a_next, ..., a_prev, u, b_next, ..., b_prev.
+        start[pa] = n1;
+        piece_of[pb] = pa;
     }
 
     let mut pieces = Vec::new();
     for f in 0..nf {
         if inside[f] && find(&mut piece_of, f) == f {
-            let poly = drop_collinear(cycles[f].iter().map(|&i| pos[i]).collect());
+            let mut cycle = Vec::new();
+            let mut h = start[f];
+            loop {
+                cycle.push(pos[from[h]]);
+                h = next[h];
+                if h == start[f] || cycle.len() > 3 * nf {
+                    break;
+                }
+            }
+            let poly = drop_collinear(cycle);
             if !is_strictly_convex_ccw(&poly) {
                 return Err(DecomposeError::NotConvex);
             }
@@ -159,47 +203,38 @@ fn classify_faces(cdt: &Cdt) -> Vec<bool> {
     state.into_iter().map(|s| s == Some(true)).collect()
 }
 
-/// Merges convex cycle `a` (holding directed edge u->v) and `b` (holding v->u) when the result
-/// stays convex at u and at v.
-fn try_merge(a: &[usize], b: &[usize], u: usize, v: usize, pos: &[DVec2]) -> Option<Vec<usize>> {
-    let (na, nb) = (a.len(), b.len());
-    let ia = (0..na).find(|&i| a[i] == u && a[(i + 1) % na] == v)?;
-    let ib = (0..nb).find(|&i| b[i] == v && b[(i + 1) % nb] == u)?;
-    let a_prev = a[(ia + na - 1) % na];
-    let a_next = a[(ia + 2) % na];
-    let b_prev = b[(ib + nb - 1) % nb];
-    let b_next = b[(ib + 2) % nb];
-    if a_prev == b_next || b_prev == a_next {
-        return None;
+/// Removes vertices where the boundary goes straight on. One pass keeps the vertices that turn
+/// against their neighbours in the input (for a boundary without spikes that is the answer: a
+/// vertex whose neighbours are dropped keeps lines through the same points); then any collinear
+/// triple left (a spike) is removed one at a time, as before, which costs nothing when none is.
+fn drop_collinear(poly: Vec<DVec2>) -> Vec<DVec2> {
+    let n = poly.len();
+    if n <= 3 {
+        return poly;
     }
-    if orient(pos[a_prev], pos[u], pos[b_next]) == Orientation::Cw
-        || orient(pos[b_prev], pos[v], pos[a_next]) == Orientation::Cw
-    {
-        return None;
+    let mut out: Vec<DVec2> = (0..n)
+        .filter(|&i| {
+            orient(poly[(i + n - 1) % n], poly[i], poly[(i + 1) % n]) != Orientation::Collinear
+        })
+        .map(|i| poly[i])
+        .collect();
+    if out.len() < 3 {
+        out = poly;
     }
-    // v, a_next, ..., a_prev, u, then b_next, ..., b_prev.
-    let mut out = Vec::with_capacity(na + nb - 2);
-    out.extend((0..na).map(|k| a[(ia + 1 + k) % na]));
-    out.extend((0..nb - 2).map(|k| b[(ib + 2 + k) % nb]));
-    Some(out)
-}
-
-/// Removes vertices where the boundary goes straight on.
-fn drop_collinear(mut poly: Vec<DVec2>) -> Vec<DVec2> {
     let mut changed = true;
-    while changed && poly.len() > 3 {
+    while changed && out.len() > 3 {
         changed = false;
-        let n = poly.len();
+        let n = out.len();
         for i in 0..n {
-            let (a, b, c) = (poly[(i + n - 1) % n], poly[i], poly[(i + 1) % n]);
+            let (a, b, c) = (out[(i + n - 1) % n], out[i], out[(i + 1) % n]);
             if orient(a, b, c) == Orientation::Collinear {
-                poly.remove(i);
+                out.remove(i);
                 changed = true;
                 break;
             }
         }
     }
-    poly
+    out
 }
 
 /// Signed area (shoelace), for checks and reports; not used to decide anything.

@@ -11,6 +11,12 @@
 //!   (no crossings, no touching, no spikes that double back);
 //! - every hole lies strictly inside the exterior and outside every other hole.
 //!
+//! Cost: above 64 edges, edge pairs and hole-in-ring tests come from an R-tree of the edges'
+//! boxes, so ordinary footprints cost O(n log n). Long edges that pass near many others (a star
+//! with 10^6 spikes) give far more candidate pairs; validation examines at most
+//! [`WORK_PER_EDGE`] candidates per edge (plus [`WORK_BASE`]) and otherwise rejects the polygon
+//! as [`RingRejection::TooComplex`], so no footprint costs more than linear work in the checks.
+//!
 //! Repairs (closing, repeated points, orientation) do not move any point, so they cannot add solid
 //! area. Anything else is rejected: a rejected polygon gives no blocker, which is conservative,
 //! and its object still counts as an occludee.
@@ -27,6 +33,32 @@ use crate::geom::predicates::{
 
 /// Below this many edges, all pairs are tested directly instead of through an R-tree.
 const BRUTE_FORCE_EDGES: usize = 64;
+
+/// Candidate edge pairs and ray candidates the validation of one polygon may examine per edge,
+/// beyond [`WORK_BASE`]. Real footprints need a few per edge (Lyon: at most 3.5, over its 42
+/// footprints of more than 64 edges).
+pub const WORK_PER_EDGE: u64 = 64;
+/// Candidates any polygon may examine, whatever its size.
+pub const WORK_BASE: u64 = 1 << 20;
+
+/// What validation may still examine; `spend` is false once it is used up.
+struct Budget(u64);
+
+impl Budget {
+    fn for_edges(edges: usize) -> Budget {
+        Budget(WORK_BASE.saturating_add(WORK_PER_EDGE.saturating_mul(edges as u64)))
+    }
+    fn spend(&mut self) -> bool {
+        let ok = self.0 > 0;
+        self.0 = self.0.saturating_sub(1);
+        ok
+    }
+}
+
+/// Validation gave up: see [`WORK_PER_EDGE`].
+struct TooComplex;
+
+type EdgeTree = RTree<GeomWithData<Rectangle<[f64; 2]>, usize>>;
 
 /// The outcome of repairing one polygon.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,8 +104,13 @@ fn repair_inner(
     if out.is_empty() {
         return Err((0, RingRejection::TooFewPoints));
     }
-    if let Some(ri) = first_self_intersecting_ring(&out) {
-        return Err((ri, RingRejection::SelfIntersection));
+    let edges = edges_of(&out);
+    let mut budget = Budget::for_edges(edges.len());
+    let tree = (edges.len() > BRUTE_FORCE_EDGES).then(|| edge_tree(&edges));
+    match first_self_intersecting_ring(&out, &edges, tree.as_ref(), &mut budget) {
+        Err(TooComplex) => return Err((0, RingRejection::TooComplex)),
+        Ok(Some(ri)) => return Err((ri, RingRejection::SelfIntersection)),
+        Ok(None) => {}
     }
     for (ri, r) in out.iter_mut().enumerate() {
         let want = if ri == 0 {
@@ -91,18 +128,65 @@ fn repair_inner(
         }
     }
     // No edges meet, so one vertex decides where a whole hole lies.
-    for hi in 1..out.len() {
-        let p = out[hi][0];
-        if point_in_ring(&out[0], p) != Containment::Inside {
-            return Err((hi, RingRejection::HoleOutside));
-        }
-        for (hj, ring) in out.iter().enumerate().skip(1) {
-            if hj != hi && point_in_ring(ring, p) != Containment::Outside {
+    let Some(tree) = tree else {
+        for hi in 1..out.len() {
+            let p = out[hi][0];
+            if point_in_ring(&out[0], p) != Containment::Inside {
                 return Err((hi, RingRejection::HoleOutside));
             }
+            for (hj, ring) in out.iter().enumerate().skip(1) {
+                if hj != hi && point_in_ring(ring, p) != Containment::Outside {
+                    return Err((hi, RingRejection::HoleOutside));
+                }
+            }
+        }
+        return Ok(out);
+    };
+    // Many edges: the parity of every ring at once, from the edges whose boxes meet the ray from
+    // the hole's vertex towards +x (the same half-open rule as `point_in_ring`; the vertex lies
+    // on no other ring's edge, which validation has checked).
+    let x_max = edges.iter().fold(f64::NEG_INFINITY, |m, e| m.max(e.a.x));
+    let mut crossed: Vec<usize> = Vec::new();
+    for (hi, hole) in out.iter().enumerate().skip(1) {
+        let p = hole[0];
+        crossed.clear();
+        let ray = AABB::from_corners([p.x, p.y], [x_max.max(p.x), p.y]);
+        for cand in tree.locate_in_envelope_intersecting(ray) {
+            if !budget.spend() {
+                return Err((0, RingRejection::TooComplex));
+            }
+            let e = &edges[cand.data];
+            if e.ring != hi && crosses_right(e.a, e.b, p) {
+                crossed.push(e.ring);
+            }
+        }
+        crossed.sort_unstable();
+        let odd = |ring: usize| crossed.iter().filter(|&&r| r == ring).count() % 2 == 1;
+        if !odd(0) {
+            return Err((hi, RingRejection::HoleOutside));
+        }
+        let mut k = 0;
+        while k < crossed.len() {
+            let r = crossed[k];
+            let run = crossed[k..].iter().take_while(|&&x| x == r).count();
+            if r != 0 && run % 2 == 1 {
+                return Err((hi, RingRejection::HoleOutside));
+            }
+            k += run;
         }
     }
     Ok(out)
+}
+
+/// Whether edge `a -> b` crosses the horizontal ray from `p` towards +x, with the half-open rule
+/// of [`point_in_ring`] (exact).
+fn crosses_right(a: DVec2, b: DVec2, p: DVec2) -> bool {
+    if (a.y > p.y) == (b.y > p.y) {
+        return false;
+    }
+    let o = orient(a, b, p);
+    let upward = b.y > a.y;
+    (upward && o == Orientation::Ccw) || (!upward && o == Orientation::Cw)
 }
 
 /// An edge: ring index, index of its first vertex in the ring, endpoints.
@@ -114,9 +198,9 @@ struct Edge {
     b: DVec2,
 }
 
-/// The ring of the first offending edge pair, if any two edges meet where they must not.
-fn first_self_intersecting_ring(rings: &[Ring]) -> Option<usize> {
-    let mut edges = Vec::new();
+/// Every edge of every ring, ring by ring.
+fn edges_of(rings: &[Ring]) -> Vec<Edge> {
+    let mut edges = Vec::with_capacity(rings.iter().map(Vec::len).sum());
     for (ring, r) in rings.iter().enumerate() {
         for i in 0..r.len() {
             edges.push(Edge {
@@ -127,38 +211,56 @@ fn first_self_intersecting_ring(rings: &[Ring]) -> Option<usize> {
             });
         }
     }
-    let len_of = |ring: usize| rings[ring].len();
-    let bad = |e: &Edge, f: &Edge| edges_conflict(e, f, len_of(e.ring));
-    if edges.len() <= BRUTE_FORCE_EDGES {
-        for (k, e) in edges.iter().enumerate() {
-            for f in &edges[k + 1..] {
-                if bad(e, f) {
-                    return Some(e.ring.min(f.ring));
-                }
-            }
-        }
-        return None;
-    }
-    let rect = |e: &Edge| {
-        Rectangle::from_corners(
-            [e.a.x.min(e.b.x), e.a.y.min(e.b.y)],
-            [e.a.x.max(e.b.x), e.a.y.max(e.b.y)],
-        )
-    };
-    let tree = RTree::bulk_load(
+    edges
+}
+
+fn edge_box(e: &Edge) -> ([f64; 2], [f64; 2]) {
+    (
+        [e.a.x.min(e.b.x), e.a.y.min(e.b.y)],
+        [e.a.x.max(e.b.x), e.a.y.max(e.b.y)],
+    )
+}
+
+fn edge_tree(edges: &[Edge]) -> EdgeTree {
+    RTree::bulk_load(
         edges
             .iter()
             .enumerate()
-            .map(|(k, e)| GeomWithData::new(rect(e), k))
+            .map(|(k, e)| {
+                let (lo, hi) = edge_box(e);
+                GeomWithData::new(Rectangle::from_corners(lo, hi), k)
+            })
             .collect(),
-    );
+    )
+}
+
+/// The ring of the first offending edge pair, if any two edges meet where they must not; pairs
+/// come from `tree` when there is one, else every pair is tested.
+fn first_self_intersecting_ring(
+    rings: &[Ring],
+    edges: &[Edge],
+    tree: Option<&EdgeTree>,
+    budget: &mut Budget,
+) -> Result<Option<usize>, TooComplex> {
+    let len_of = |ring: usize| rings[ring].len();
+    let bad = |e: &Edge, f: &Edge| edges_conflict(e, f, len_of(e.ring));
+    let Some(tree) = tree else {
+        for (k, e) in edges.iter().enumerate() {
+            for f in &edges[k + 1..] {
+                if bad(e, f) {
+                    return Ok(Some(e.ring.min(f.ring)));
+                }
+            }
+        }
+        return Ok(None);
+    };
     let mut worst: Option<usize> = None;
     for (k, e) in edges.iter().enumerate() {
-        let env = AABB::from_corners(
-            [e.a.x.min(e.b.x), e.a.y.min(e.b.y)],
-            [e.a.x.max(e.b.x), e.a.y.max(e.b.y)],
-        );
-        for cand in tree.locate_in_envelope_intersecting(env) {
+        let (lo, hi) = edge_box(e);
+        for cand in tree.locate_in_envelope_intersecting(AABB::from_corners(lo, hi)) {
+            if !budget.spend() {
+                return Err(TooComplex);
+            }
             let j = cand.data;
             if j > k && bad(e, &edges[j]) {
                 let r = e.ring.min(edges[j].ring);
@@ -166,7 +268,7 @@ fn first_self_intersecting_ring(rings: &[Ring]) -> Option<usize> {
             }
         }
     }
-    worst
+    Ok(worst)
 }
 
 /// True when edges `e` and `f` meet in a way a simple polygon does not allow.

@@ -241,6 +241,9 @@ pub enum RingRejection {
     SelfIntersection,
     /// A hole does not lie inside the exterior ring, or lies inside another hole.
     HoleOutside,
+    /// So many edges pass near one another that validation would cost more than
+    /// `footprint::WORK_PER_EDGE` candidate tests per edge; refused rather than checked slowly.
+    TooComplex,
 }
 
 impl fmt::Display for RingRejection {
@@ -250,6 +253,9 @@ impl fmt::Display for RingRejection {
             RingRejection::ZeroArea => "zero area",
             RingRejection::SelfIntersection => "self-intersection (edges cross or touch)",
             RingRejection::HoleOutside => "hole outside its exterior or inside another hole",
+            RingRejection::TooComplex => {
+                "too complex to validate (too many edges pass near one another)"
+            }
         })
     }
 }
