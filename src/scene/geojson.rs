@@ -132,6 +132,19 @@ impl<'a> GeoJsonReader<'a> {
         });
     }
 
+    /// Skips a feature for its geometry. Its height attribute still counts as seen, so a file
+    /// whose features all lack usable geometry reports that (no objects), not a missing height.
+    fn skip_geometry(&mut self, i: usize, name: &str, props: &Map<String, Value>, why: SkipReason) {
+        let numeric = |v: Option<&Value>| match v {
+            Some(Value::Number(_)) => true,
+            Some(Value::String(s)) => s.trim().parse::<f64>().is_ok(),
+            _ => false,
+        };
+        let attrs = [&self.opts.height_attr, &self.opts.levels_attr];
+        self.saw_height |= attrs.into_iter().flatten().any(|a| numeric(props.get(a)));
+        self.skip(i, name, why);
+    }
+
     /// Index the next feature will get.
     pub fn next_index(&self) -> usize {
         self.features
@@ -152,7 +165,7 @@ impl<'a> GeoJsonReader<'a> {
         }
         let name = feature_name(f.id.as_ref(), props).unwrap_or_else(|| format!("feature {i}"));
         let Some(geom) = &f.geometry else {
-            self.skip(i, &name, SkipReason::EmptyGeometry);
+            self.skip_geometry(i, &name, props, SkipReason::EmptyGeometry);
             return Ok(());
         };
         let Some(kind) = geom.kind.as_deref() else {
@@ -174,7 +187,7 @@ impl<'a> GeoJsonReader<'a> {
                 }
             },
             "Point" | "MultiPoint" | "LineString" | "MultiLineString" | "GeometryCollection" => {
-                self.skip(i, &name, SkipReason::NotAreal(kind.to_string()));
+                self.skip_geometry(i, &name, props, SkipReason::NotAreal(kind.to_string()));
                 return Ok(());
             }
             other => {
@@ -192,7 +205,7 @@ impl<'a> GeoJsonReader<'a> {
             .filter(|p| !p.is_empty())
             .collect();
         if polygons.is_empty() {
-            self.skip(i, &name, SkipReason::EmptyGeometry);
+            self.skip_geometry(i, &name, props, SkipReason::EmptyGeometry);
             return Ok(());
         }
 
