@@ -18,6 +18,10 @@
 
 pub mod runtime;
 
+/// The fuzz targets' bodies, shared with the corpus replay test; not a public API.
+#[doc(hidden)]
+pub mod fuzzing;
+
 #[cfg(feature = "bake")]
 pub mod bake;
 #[cfg(feature = "bake")]

@@ -1,0 +1,299 @@
+//! The bodies of the fuzz targets (`fuzz/fuzz_targets/*.rs`), shared with the corpus replay
+//! test (`tests/fuzz_corpus.rs`) so that both run exactly the same code. Not a public API.
+//!
+//! Input: arbitrary bytes, one function per target. Output: `Ok` with a small summary, or the
+//! typed error the library gives for bad input ([`FormatError`], [`LoadError`]).
+//! Invariants checked beyond "no panic" (a violated one panics, which the fuzzer reports):
+//! - store and blob: each input runs as given, then with its checksum made right, so mutations
+//!   reach the rules behind the checksum;
+//! - store: every cell of a parsed store reads without error; the store re-encodes to the same
+//!   bytes (minor version and checksum aside); each cell's blob round-trips; the culler returns
+//!   ascending in-range ids and never culls a box that contains the cell;
+//! - blob: an accepted blob re-encodes to the same bytes, an accepted frame to the same 112 bytes;
+//!   the culler's invariants as for the store;
+//! - scene: object indices follow input order, boxes are finite and not empty, every blocker is
+//!   a strictly convex counter-clockwise polygon with finite coordinates and `base < top`;
+//! - walkable: every ring has at least 3 finite points.
+//!
+//! Runtime targets build with `--no-default-features`; scene targets need the `bake` feature.
+
+use crate::runtime::crc::crc32;
+use crate::runtime::culler::{pvs, BoxTree};
+use crate::runtime::format::{
+    decode_blob, decode_frame, encode_blob, encode_frame, encode_store, CellRecord, FormatError,
+    Store, FRAME_LEN, HEADER_LEN,
+};
+use crate::runtime::{CellId, Frame, GridDescriptor};
+
+/// Cells of a parsed store on which the store target runs the culler.
+const CULLED_CELLS: usize = 4;
+
+/// The frame the blob target decodes whole inputs with: per-cell ground (so records carry a
+/// ground byte) and a grid of 2^20 cells.
+pub const BLOB_FRAME: Frame = Frame {
+    origin: [843000.0, 6518000.0, 0.0],
+    grid: GridDescriptor {
+        min_x: 0.0,
+        min_y: 0.0,
+        cell_size: 100.0,
+        nx: 1024,
+        ny: 1024,
+    },
+    quantum: 0.5,
+    eye_lo: 1.5,
+    eye_hi: 2.0,
+    ground_z0: 160.0,
+    ground_step: 0.5,
+    h0: 4.0,
+    h_ratio: 1.25,
+};
+
+/// Fuzz target `store`: [`Store::parse`], then every cell, re-encoding, blobs and the culler;
+/// then the same on the input with its checksum made right (the checksum stops nearly every
+/// mutation at rule S9, and whoever crafts a file can compute it). Returns the first result, the
+/// number of cells.
+pub fn store(data: &[u8]) -> Result<u32, FormatError> {
+    let first = store_once(data);
+    if data.len() >= HEADER_LEN {
+        let mut fixed = data.to_vec();
+        fixed[CRC_FIELD].fill(0);
+        let crc = crc32(&fixed);
+        fixed[CRC_FIELD].copy_from_slice(&crc.to_le_bytes());
+        if fixed != data {
+            let _ = store_once(&fixed);
+        }
+    }
+    first
+}
+
+/// Where a store keeps its CRC-32 (FORMAT.md section 5.1).
+const CRC_FIELD: std::ops::Range<usize> = 132..136;
+
+fn store_once(data: &[u8]) -> Result<u32, FormatError> {
+    let s = Store::parse(data)?;
+    let f = *s.frame();
+    let n = s.cell_count();
+    // Parse checked the length: one index byte per cell, so this is bounded by the input.
+    let mut cells = Vec::with_capacity(n as usize);
+    for id in 0..n {
+        let rec = s
+            .cell(id)
+            .unwrap_or_else(|e| panic!("cell {id} of a parsed store: {e}"));
+        let blob = encode_blob(&f, id, &rec)
+            .unwrap_or_else(|e| panic!("cell {id} of a parsed store does not encode: {e}"));
+        assert_eq!(decode_blob(&f, &blob), Ok((id, rec)), "cell {id}'s blob");
+        cells.push(rec);
+    }
+    assert!(s.cell(n).is_err(), "a cell past the grid must be an error");
+    let again = encode_store(&f, &cells).expect("an accepted store re-encodes");
+    assert_eq!(again.len(), data.len(), "re-encoded length");
+    assert_eq!(again[..10], data[..10], "magic and major");
+    assert_eq!(again[12..132], data[12..132], "flags, frame, payload_len");
+    assert_eq!(again[136..], data[136..], "index, block table, payload");
+    let with_vos = cells
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| !r.vos().is_empty())
+        .map(|(i, _)| i as CellId);
+    let picks = [0, n - 1].into_iter().chain(with_vos.take(CULLED_CELLS));
+    for id in picks {
+        check_culler(&f, id, &cells[id as usize]);
+    }
+    Ok(n)
+}
+
+/// Fuzz target `blob`: the whole input as a blob of [`BLOB_FRAME`]; then, when there are at
+/// least 112 bytes, the first 112 as a frame and the rest as a blob of that frame. Each blob is
+/// decoded as given and again with its checksum made right (as for [`store`]). Returns the
+/// result of the blob decoded as given with the input's own frame (with [`BLOB_FRAME`] when the
+/// input is shorter than a frame).
+pub fn blob(data: &[u8]) -> Result<CellId, FormatError> {
+    let fixed = blob_with(&BLOB_FRAME, data);
+    let Some((head, rest)) = data.split_first_chunk::<FRAME_LEN>() else {
+        return fixed;
+    };
+    let f = decode_frame(head)?;
+    assert_eq!(&encode_frame(&f), head, "an accepted frame re-encodes");
+    blob_with(&f, rest)
+}
+
+fn blob_with(f: &Frame, bytes: &[u8]) -> Result<CellId, FormatError> {
+    let first = blob_once(f, bytes);
+    if let Some((body, _)) = bytes.split_last_chunk::<4>() {
+        let mut fixed = body.to_vec();
+        fixed.extend_from_slice(&crc32(body).to_le_bytes());
+        if fixed != bytes {
+            let _ = blob_once(f, &fixed);
+        }
+    }
+    first
+}
+
+fn blob_once(f: &Frame, bytes: &[u8]) -> Result<CellId, FormatError> {
+    let (id, rec) = decode_blob(f, bytes)?;
+    assert_eq!(
+        encode_blob(f, id, &rec).as_deref(),
+        Ok(bytes),
+        "an accepted blob re-encodes"
+    );
+    check_culler(f, id, &rec);
+    Ok(id)
+}
+
+/// Runs the culler on cell `id` over boxes around it: the ids come out ascending and in range,
+/// and a box that contains the cell (it holds the eyes) is never culled.
+fn check_culler(f: &Frame, id: CellId, rec: &CellRecord) {
+    let Some(view) = f.cell_view(id, rec.ground()) else {
+        panic!("cell {id} of an accepted frame has no view");
+    };
+    let [x0, y0, x1, y1] = view.rect;
+    let s = f.grid.cell_size;
+    let g = f.ground_z(rec.ground());
+    // Box 0 holds the cell and its eyes; the others tile a ring of 8 cells around it, low and
+    // tall, as the culler's typical occludees.
+    let mut boxes = vec![[
+        x0 - 0.5 * s,
+        y0 - 0.5 * s,
+        g,
+        x1 + 0.5 * s,
+        y1 + 0.5 * s,
+        view.e1 + 1.0,
+    ]];
+    for k in 0..16 {
+        let (i, j) = ((k % 4) as f64, (k / 4) as f64);
+        let bx = x0 + (i - 1.5) * 2.0 * s;
+        let by = y0 + (j - 1.5) * 2.0 * s;
+        let top = if k % 2 == 0 { g + 1.0 } else { g + 3.0 * s };
+        boxes.push([bx, by, g, bx + s, by + s, top]);
+    }
+    let tree = BoxTree::new(&boxes);
+    let mut out = Vec::new();
+    pvs(f, id, rec, &tree, &mut out);
+    assert!(
+        out.windows(2).all(|w| w[0] < w[1]),
+        "PVS ids must ascend: {out:?}"
+    );
+    assert!(out.iter().all(|&i| (i as usize) < boxes.len()), "{out:?}");
+    if boxes[0].iter().all(|x| x.is_finite()) {
+        assert_eq!(
+            out.first(),
+            Some(&0),
+            "cell {id}: the box holding the cell was culled"
+        );
+    }
+}
+
+#[cfg(feature = "bake")]
+pub use scene_targets::*;
+
+#[cfg(feature = "bake")]
+mod scene_targets {
+    use std::path::{Path, PathBuf};
+
+    use glam::DVec3;
+
+    use crate::geom::predicates::is_strictly_convex_ccw;
+    use crate::scene::{load_bytes, summary, walkable, LoadError, ReadOptions};
+
+    /// Reader options of the scene targets: GeoJSON heights from `height`, or `levels` storeys.
+    pub fn scene_options() -> ReadOptions {
+        ReadOptions {
+            height_attr: Some("height".into()),
+            levels_attr: Some("levels".into()),
+            ..ReadOptions::default()
+        }
+    }
+
+    /// The scene targets' body: the whole load ([`load_bytes`]: reader, local frame,
+    /// ring repair, convex decomposition, solids), then the scene's invariants and its summary.
+    /// Returns the number of objects.
+    pub fn scene(file_name: &str, data: &[u8]) -> Result<usize, LoadError> {
+        let s = load_bytes(&[(PathBuf::from(file_name), data)], &scene_options())?;
+        for (i, o) in s.objects.iter().enumerate() {
+            assert_eq!(o.index as usize, i, "object indices follow input order");
+            let b = o.bbox;
+            assert!(
+                !b.is_empty() && b.min.is_finite() && b.max.is_finite(),
+                "object {i}: box {b:?}"
+            );
+        }
+        let mut last = 0;
+        for (k, b) in s.blockers.iter().enumerate() {
+            assert!(
+                (b.object as usize) < s.objects.len() && b.object >= last,
+                "blocker {k}: object {} out of order",
+                b.object
+            );
+            last = b.object;
+            assert!(
+                b.polygon.iter().all(|p| p.is_finite()) && is_strictly_convex_ccw(&b.polygon),
+                "blocker {k} is not strictly convex and counter-clockwise: {:?}",
+                b.polygon
+            );
+            assert!(
+                b.base.is_finite() && b.top.is_finite() && b.base < b.top,
+                "blocker {k}: base {} top {}",
+                b.base,
+                b.top
+            );
+        }
+        let _ = summary::summarize(&s);
+        Ok(s.objects.len())
+    }
+
+    /// Fuzz target `geojson`: [`scene`] as `fuzz.geojson`.
+    pub fn geojson(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.geojson", data)
+    }
+
+    /// Fuzz target `cityjson`: [`scene`] as `fuzz.json` (GeoJSON or CityJSON by content).
+    pub fn cityjson(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.json", data)
+    }
+
+    /// Fuzz target `obj`: [`scene`] as `fuzz.obj`.
+    pub fn obj(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.obj", data)
+    }
+
+    /// World origin the walkable target subtracts (Lyon's, as the seeds are from Lyon).
+    pub const WALKABLE_ORIGIN: DVec3 = DVec3::new(1_842_000.0, 5_175_000.0, 0.0);
+
+    /// Fuzz target `walkable`: the `--cells` reader, then cell selection over a 4 x 4 grid laid
+    /// on the area's extent. Returns the number of rings.
+    pub fn walkable(data: &[u8]) -> Result<usize, LoadError> {
+        let area = walkable::read_bytes(Path::new("fuzz-cells.geojson"), data, WALKABLE_ORIGIN)?;
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for ring in &area {
+            assert!(ring.len() >= 3, "a ring of {} points", ring.len());
+            for p in ring {
+                assert!(p.is_finite(), "walkable point {p}");
+                lo = [lo[0].min(p.x), lo[1].min(p.y)];
+                hi = [hi[0].max(p.x), hi[1].max(p.y)];
+            }
+        }
+        let (w, h) = ((hi[0] - lo[0]) / 4.0, (hi[1] - lo[1]) / 4.0);
+        let mut met = 0;
+        for k in 0..16 {
+            let (i, j) = ((k % 4) as f64, (k / 4) as f64);
+            // The last column and row end exactly at the extent, so the cells tile it.
+            let edge = |lo: f64, hi: f64, step: f64, k: f64| {
+                if k == 4.0 {
+                    hi
+                } else {
+                    lo + k * step
+                }
+            };
+            let r = [
+                edge(lo[0], hi[0], w, i),
+                edge(lo[1], hi[1], h, j),
+                edge(lo[0], hi[0], w, i + 1.0),
+                edge(lo[1], hi[1], h, j + 1.0),
+            ];
+            met += walkable::rect_meets_area(r, &area) as usize;
+        }
+        // The grid covers every ring vertex, so some cell meets the area.
+        assert!(met > 0, "no cell of the area's own extent meets it");
+        Ok(area.len())
+    }
+}
