@@ -4,7 +4,9 @@
 //! The hashes `vocc bake` writes beside the store (for incremental rebakes) are timed apart.
 //! Input: `VOCC_SCALE` (comma-separated building counts; default `10000,100000`), `VOCC_SEED`
 //! (default 1). `cargo bench --bench scale`; `make scale` runs 10^4 to 10^6.
-//! Output: one table row per size: cells, stage times, core-ms per cell, peak memory, store size;
+//! Output: one table row per size: cells, stage times, core-ms per cell (wall x threads), CPU ms
+//! per cell (what the process used: robust when other work shares the machine), peak memory,
+//! store size;
 //! the rows are also appended as JSON lines to `target/scale.jsonl`.
 //! Each size runs in a child process of this bench (the same executable, `VOCC_SCALE_CHILD` set),
 //! so its peak resident memory (`VmHWM` of /proc/self/status) is its own.
@@ -31,6 +33,22 @@ fn peak_mib() -> f64 {
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
+/// CPU seconds (user + system) used by this process so far (Linux; NaN elsewhere). Unlike wall
+/// time it hardly depends on what else the machine runs.
+fn cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the command name's closing parenthesis; utime and stime are the
+            // 14th and 15th fields of the line, in clock ticks (100 per second on Linux).
+            let rest = &s[s.rfind(')')? + 2..];
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            let t = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+            Some(t / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
 fn child(buildings: usize, seed: u64) {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tmp/scale");
     std::fs::create_dir_all(&dir).unwrap();
@@ -55,11 +73,13 @@ fn child(buildings: usize, seed: u64) {
     .expect("the generated city loads");
     let load_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
+    let cpu0 = cpu_s();
     let plan = Plan::new(&s, BakeParams::default()).unwrap();
     let cells = plan.cells();
     let baked = bake_cells(&plan, &cells, &|_| {});
     let bytes = encode(&plan.frame, &baked).unwrap();
     let bake_s = t.elapsed().as_secs_f64();
+    let bake_cpu_s = cpu_s() - cpu0;
     // What `vocc bake` adds: the content hashes for a later incremental rebake.
     let t = Instant::now();
     let hashes = CellHashes::new(&plan, &cells).encode();
@@ -70,11 +90,12 @@ fn child(buildings: usize, seed: u64) {
     ms.sort_by(f64::total_cmp);
     let vos: usize = baked.iter().map(|c| c.record.vos().len()).sum();
     println!(
-        "{{\"buildings\":{buildings},\"blockers\":{},\"cells\":{},\"threads\":{threads},\"gen_s\":{gen_s:.2},\"load_s\":{load_s:.2},\"bake_s\":{bake_s:.2},\"hash_s\":{hash_s:.2},\"hash_bytes\":{},\"core_ms_per_cell\":{:.2},\"median_ms\":{:.2},\"vos\":{vos},\"bytes\":{},\"peak_mib\":{:.0}}}",
+        "{{\"buildings\":{buildings},\"blockers\":{},\"cells\":{},\"threads\":{threads},\"gen_s\":{gen_s:.2},\"load_s\":{load_s:.2},\"bake_s\":{bake_s:.2},\"hash_s\":{hash_s:.2},\"hash_bytes\":{},\"core_ms_per_cell\":{:.2},\"cpu_ms_per_cell\":{:.2},\"median_ms\":{:.2},\"vos\":{vos},\"bytes\":{},\"peak_mib\":{:.0}}}",
         s.blockers.len(),
         cells.len(),
         hashes.len(),
         bake_s * 1e3 * threads as f64 / cells.len().max(1) as f64,
+        bake_cpu_s * 1e3 / cells.len().max(1) as f64,
         ms.get(ms.len() / 2).copied().unwrap_or(0.0),
         bytes.len(),
         peak_mib()
@@ -102,7 +123,7 @@ fn main() {
     let log = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/scale.jsonl");
     println!("generated city, 100 m cells, seed {seed}; each size in its own process");
     println!(
-        "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>7} {:>13} {:>10} {:>6} {:>9} {:>9}",
+        "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>7} {:>13} {:>12} {:>10} {:>6} {:>9} {:>9}",
         "buildings",
         "blockers",
         "cells",
@@ -111,6 +132,7 @@ fn main() {
         "bake s",
         "hash s",
         "core-ms/cell",
+        "CPU ms/cell",
         "median ms",
         "VOs",
         "bytes",
@@ -133,7 +155,7 @@ fn main() {
             .to_string();
         let v: serde_json::Value = serde_json::from_str(&line).unwrap();
         println!(
-            "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>7} {:>13} {:>10} {:>6} {:>9} {:>9}",
+            "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>7} {:>13} {:>12} {:>10} {:>6} {:>9} {:>9}",
             v["buildings"].to_string(),
             v["blockers"].to_string(),
             v["cells"].to_string(),
@@ -142,6 +164,7 @@ fn main() {
             v["bake_s"].to_string(),
             v["hash_s"].to_string(),
             v["core_ms_per_cell"].to_string(),
+            v["cpu_ms_per_cell"].to_string(),
             v["median_ms"].to_string(),
             v["vos"].to_string(),
             v["bytes"].to_string(),
