@@ -1,0 +1,93 @@
+//! Replays the committed fuzz corpora on stable Rust, as part of `cargo test`.
+//!
+//! Input: every file of `fuzz/corpus/<target>/` for the six targets of `fuzz/` (docs/FUZZING.md).
+//! Output: each file goes through the very function its fuzz target calls (`vocc::fuzzing`),
+//! which checks the library's invariants and panics on a violation.
+//! Invariants: no file panics (each runs under `catch_unwind`, and every failure is listed with
+//! its path); a result is `Ok` or a typed error (`FormatError`, `LoadError`) whose message is
+//! not empty; a corpus directory that is missing or empty fails the test, so the replay cannot
+//! silently check nothing.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+
+use vocc::fuzzing;
+
+/// Runs `entry` on every file of `fuzz/corpus/<target>`; returns (files, accepted).
+fn replay<E: std::fmt::Display>(
+    target: &str,
+    entry: impl Fn(&[u8]) -> Result<(), E>,
+) -> (usize, usize) {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/corpus")
+        .join(target);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("corpus {} is missing: {e}", dir.display()))
+        .map(|e| e.expect("corpus entry").path())
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty(), "corpus {} is empty", dir.display());
+    let mut failures = Vec::new();
+    let mut accepted = 0;
+    for f in &files {
+        let bytes = std::fs::read(f).expect("read a corpus file");
+        match catch_unwind(AssertUnwindSafe(|| entry(&bytes))) {
+            Ok(Ok(())) => accepted += 1,
+            Ok(Err(e)) if e.to_string().trim().is_empty() => {
+                failures.push(format!("{}: an error without a message", name(f)))
+            }
+            Ok(Err(_)) => {}
+            Err(_) => failures.push(format!("{}: panicked", name(f))),
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{target}: {} of {} corpus files failed:\n{}",
+        failures.len(),
+        files.len(),
+        failures.join("\n")
+    );
+    (files.len(), accepted)
+}
+
+fn name(p: &Path) -> String {
+    p.file_name().unwrap_or_default().to_string_lossy().into()
+}
+
+#[test]
+fn store_corpus() {
+    let (n, ok) = replay("store", |b| fuzzing::store(b).map(drop));
+    // Seeds include valid stores (FORMAT.md's example and bakes), so some must be accepted.
+    assert!(ok > 0, "none of {n} store files was accepted");
+}
+
+#[test]
+fn blob_corpus() {
+    let (n, ok) = replay("blob", |b| fuzzing::blob(b).map(drop));
+    assert!(ok > 0, "none of {n} blob files was accepted");
+}
+
+#[test]
+fn geojson_corpus() {
+    let (n, ok) = replay("geojson", |b| fuzzing::geojson(b).map(drop));
+    assert!(ok > 0, "none of {n} GeoJSON files loaded");
+}
+
+#[test]
+fn cityjson_corpus() {
+    let (n, ok) = replay("cityjson", |b| fuzzing::cityjson(b).map(drop));
+    assert!(ok > 0, "none of {n} CityJSON files loaded");
+}
+
+#[test]
+fn obj_corpus() {
+    let (n, ok) = replay("obj", |b| fuzzing::obj(b).map(drop));
+    assert!(ok > 0, "none of {n} OBJ files loaded");
+}
+
+#[test]
+fn walkable_corpus() {
+    let (n, ok) = replay("walkable", |b| fuzzing::walkable(b).map(drop));
+    assert!(ok > 0, "none of {n} walkable-area files was read");
+}
