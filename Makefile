@@ -3,7 +3,7 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test demo bench scale eval lint fresh-clone pictures
+.PHONY: build test demo bench scale eval lint fresh-clone pictures fuzz
 
 build:
 	$(CARGO) build --release
@@ -48,3 +48,12 @@ pictures:
 	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/lyon.vocc
 	$(CARGO) run --locked --release -- render target/lyon.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
 		--at 1842000,5176050 --radius 400 -o docs/img/lyon_cell_store.svg
+
+# Fuzzing (docs/FUZZING.md): every cargo-fuzz target for FUZZ_SECONDS each (default 600), one after
+# the other, growing fuzz/corpus/; logs in fuzz/logs/, findings in fuzz/artifacts/. Needs the
+# nightly toolchain and cargo-fuzz (`cargo install cargo-fuzz`). `make test` replays the committed
+# corpora on stable (tests/fuzz_corpus.rs); fuzz/minimize.sh shrinks fuzz/corpus/ back to a
+# committable size. Example: make fuzz FUZZ_SECONDS=60
+FUZZ_SECONDS ?= 600
+fuzz:
+	fuzz/run.sh $(FUZZ_SECONDS)

@@ -6,8 +6,8 @@ docs/FORMAT.md, and stores and blobs written by `vocc` (path of the binary in $V
 target/release/vocc). Output: files under the directory given (default fuzz/seeds/<target>/),
 named by content. Invariants: deterministic (same inputs, same files); every file is small
 (slices of at most a few buildings); nothing outside the output directory is written except
-the temporary folder it bakes in. Run once before the first fuzzing session; the committed
-corpora under fuzz/corpus/ are the minimized result of fuzzing from these seeds.
+the temporary folder it bakes in. The seeds are committed; fuzz/minimize.sh keeps them whole in
+the committed corpora under fuzz/corpus/ and adds what fuzzing found beyond them.
 """
 
 import hashlib
