@@ -16,7 +16,8 @@ use vocc::runtime::crc::crc32;
 use vocc::runtime::format::{encode_frame, encode_store, CellRecord};
 use vocc::scene;
 
-use crate::{parse_num, write_atomically, ReadArgs};
+use crate::args::{parse_range, parse_rect, parse_slices, ReadArgs};
+use crate::files::write_atomically;
 
 #[derive(Args)]
 pub struct BakeArgs {
@@ -77,37 +78,6 @@ pub struct BakeArgs {
     pub scan: bool,
 }
 
-fn parse_range(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s
-        .split_once("..")
-        .ok_or_else(|| format!("expected LOW..HIGH, got {s:?}"))?;
-    Ok((parse_num(a)?, parse_num(b)?))
-}
-
-fn parse_slices(s: &str) -> Result<Slices, String> {
-    if s == "auto" {
-        return Ok(Slices::Auto);
-    }
-    match s.parse::<u8>() {
-        Ok(n @ 1..=5) => Ok(Slices::Fixed(n)),
-        _ => Err(format!("expected `auto` or 1 to 5, got {s:?}")),
-    }
-}
-
-fn parse_rect(s: &str) -> Result<[f64; 4], String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| parse_num(t).ok())
-        .collect::<Option<Vec<f64>>>()
-        .ok_or_else(|| format!("expected four numbers X0,Y0,X1,Y1, got {s:?}"))?;
-    match v[..] {
-        [x0, y0, x1, y1] if x0 <= x1 && y0 <= y1 => Ok([x0, y0, x1, y1]),
-        _ => Err(format!(
-            "expected X0,Y0,X1,Y1 with X0 <= X1 and Y0 <= Y1, got {s:?}"
-        )),
-    }
-}
-
 /// Which shard this process bakes: `(index, count)`.
 pub fn shard(
     spec: &str,
@@ -160,8 +130,8 @@ fn reusable(
     plan: &Plan,
     hashes: &CellHashes,
 ) -> Result<Option<(CellHashes, Vec<u8>)>> {
-    let bytes = crate::store::read_store(old)?;
-    let store = crate::store::parse(old, &bytes)?;
+    let bytes = crate::files::read_store(old)?;
+    let store = crate::files::parse(old, &bytes)?;
     let hp = hashes_path(old);
     let old_hashes = match std::fs::read(&hp) {
         Ok(b) => CellHashes::decode(&b).with_context(|| format!("{} is damaged", hp.display()))?,

@@ -20,8 +20,8 @@ use vocc::eval::truth::TruthParams;
 use vocc::runtime::culler::BoxTree;
 use vocc::scene::{self, ReadOptions};
 
-use crate::store::{parse, read_store};
-use crate::ReadArgs;
+use crate::args::ReadArgs;
+use crate::files::{parse, read_store, write_atomically};
 
 /// Ground-truth sampling options.
 #[derive(Args, Clone)]
@@ -139,7 +139,7 @@ pub fn eval(a: EvalArgs) -> Result<()> {
             &truth,
             &cmd,
         );
-        crate::write_atomically(&dir.join("eval.md"), |w| w.write_all(md.as_bytes()))?;
+        write_atomically(&dir.join("eval.md"), |w| w.write_all(md.as_bytes()))?;
         eprintln!("wrote {}", dir.join("eval.md").display());
     }
     if sum.false_culls > 0 || rays.reached > 0 {
@@ -203,7 +203,7 @@ pub fn results(a: ResultsArgs) -> Result<()> {
         let sec = dataset_section(d, &params, &img, &|m| eprintln!("{m}"))?;
         md.push_str(&sec);
     }
-    crate::write_atomically(&a.output, |w| w.write_all(md.as_bytes()))?;
+    write_atomically(&a.output, |w| w.write_all(md.as_bytes()))?;
     eprintln!("wrote {}", a.output.display());
     Ok(())
 }

@@ -1,19 +1,26 @@
-//! The `vocc` command line: a thin layer over the library.
+//! The `vocc` command line: a thin layer over the library (the command enum and dispatch; the
+//! commands live in the modules below, the shared parsers in `args`, file handling in `files`).
 //!
 //! Input: command-line arguments. Output: reports on stdout, files where asked, errors on stderr
 //! with a non-zero exit status. Invariant: no geometry here; every decision is the library's.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use clap::{Args, Parser, Subcommand};
+use anyhow::Result;
+use clap::{Parser, Subcommand};
 
-use vocc::scene::{self, summary, ReadOptions};
+use vocc::scene;
 
+use args::{parse_xy, ReadArgs};
+use files::write_atomically;
+
+mod args;
 mod bake;
 mod eval;
+mod files;
+mod info;
+mod render;
 mod store;
 
 #[derive(Parser)]
@@ -147,55 +154,6 @@ enum Command {
     },
 }
 
-/// Options of the scene readers.
-#[derive(Args)]
-struct ReadArgs {
-    /// GeoJSON: attribute with the building height above its base, metres.
-    #[arg(long, value_name = "NAME")]
-    height_attr: Option<String>,
-    /// GeoJSON: attribute with the base elevation, metres (default: base at 0).
-    #[arg(long, value_name = "NAME")]
-    base_attr: Option<String>,
-    /// GeoJSON: attribute with the number of storeys, used when the height is missing.
-    #[arg(long, value_name = "NAME")]
-    levels_attr: Option<String>,
-    /// Metres per storey for --levels-attr.
-    #[arg(long, default_value_t = 3.0, value_name = "M")]
-    storey_height: f64,
-    /// CityJSON: level of detail to read (default: the highest each object has).
-    #[arg(long)]
-    lod: Option<String>,
-}
-
-impl ReadArgs {
-    fn options(&self) -> ReadOptions {
-        ReadOptions {
-            height_attr: self.height_attr.clone(),
-            base_attr: self.base_attr.clone(),
-            levels_attr: self.levels_attr.clone(),
-            storey_height: self.storey_height,
-            lod: self.lod.clone(),
-        }
-    }
-}
-
-/// Parses a finite number (the one number rule of every option).
-pub(crate) fn parse_num(t: &str) -> Result<f64, String> {
-    t.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| format!("{t:?} is not a finite number"))
-}
-
-/// Parses "X,Y".
-fn parse_xy(s: &str) -> Result<(f64, f64), String> {
-    let (x, y) = s
-        .split_once(',')
-        .ok_or_else(|| format!("expected X,Y, got {s:?}"))?;
-    Ok((parse_num(x)?, parse_num(y)?))
-}
-
 fn main() {
     if let Err(e) = run(Cli::parse()) {
         eprintln!("error: {e:#}");
@@ -230,18 +188,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             store::export(store, cell, to)
         }
-        Command::Info { scene, read, json } => {
-            let s = scene::load(&scene, &read.options())?;
-            let sum = summary::summarize(&s);
-            let mut out = std::io::stdout().lock();
-            if json {
-                serde_json::to_writer_pretty(&mut out, &sum)?;
-                writeln!(out)?;
-            } else {
-                print_summary(&mut out, &sum)?;
-            }
-            Ok(())
-        }
+        Command::Info { scene, read, json } => info::info(&scene, &read, json),
         Command::Render {
             debug,
             files,
@@ -253,40 +200,11 @@ fn run(cli: Cli) -> Result<()> {
             read,
             output,
         } => {
-            if !debug {
-                return store::render(files, &read, cell, at, radius, &output);
+            if debug {
+                render::render_debug(&files, &read, at, cell_size, slice, &output)
+            } else {
+                render::render_store(files, &read, cell, at, radius, &output)
             }
-            let at = at.context("--debug needs --at X,Y")?;
-            let scene = files;
-            anyhow::ensure!(
-                cell_size.is_finite() && cell_size > 0.0,
-                "--cell-size must be a positive number of metres"
-            );
-            let s = scene::load(&scene, &read.options())?;
-            let local = glam::DVec2::new(at.0 - s.origin.x, at.1 - s.origin.y);
-            let z = match slice {
-                Some(z) => z - s.origin.z,
-                None => vocc::bake::mid_slice(&s),
-            };
-            let set = vocc::bake::slice_blockers(&s, z);
-            let cell = vocc::bake::grid_cell(&s, local, cell_size);
-            let t = Instant::now();
-            let out = vocc::bake::umbra::grow_cell(&cell, &set, &Default::default());
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            let svg = vocc::bake::svg::render(&cell, &set, &out, 0.1 * cell_size);
-            write_atomically(&output, |w| w.write_all(svg.as_bytes()))?;
-            eprintln!(
-                "cell at ({:.1}, {:.1}) world, slice z = {:.1} m: {} blockers in the slice, {} seeds, {} dense VOs, {} rejected by the verifier, {ms:.1} ms; wrote {}",
-                cell[0].x + s.origin.x,
-                cell[0].y + s.origin.y,
-                z + s.origin.z,
-                set.len(),
-                out.traces.len(),
-                out.vos.len(),
-                out.rejected(),
-                output.display()
-            );
-            Ok(())
         }
         Command::Eval(a) => eval::eval(a),
         Command::Merge { shards, output } => store::merge(shards, &output),
@@ -307,230 +225,5 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-    }
-}
-
-/// Writes through a temporary file in the same folder (`.NAME.tmp`), then renames, so an
-/// interrupted run never leaves a complete-looking output: the output path holds either its old
-/// content or the new one in full. Every failure names the output and the temporary file and
-/// removes the temporary file; a full disk (ENOSPC) says so. A run killed by a signal while the
-/// temporary file is open leaves it behind (it is overwritten by the next run and is never a
-/// valid store before the write completes).
-fn write_atomically(
-    path: &std::path::Path,
-    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> Result<()> {
-    let name = path
-        .file_name()
-        .with_context(|| format!("{} is not a file path", path.display()))?;
-    let tmp = path.with_file_name(format!(".{}.tmp", name.to_string_lossy()));
-    let fail = |step: &str, e: std::io::Error| {
-        let full = if e.kind() == std::io::ErrorKind::StorageFull {
-            ": the disk is full"
-        } else {
-            ""
-        };
-        anyhow::Error::new(e).context(format!(
-            "cannot write {} ({step} {}){full}",
-            path.display(),
-            tmp.display()
-        ))
-    };
-    let result = (|| -> Result<()> {
-        let f = std::fs::File::create(&tmp).map_err(|e| fail("creating", e))?;
-        let mut w = std::io::BufWriter::new(f);
-        write(&mut w).map_err(|e| fail("writing", e))?;
-        let f = w
-            .into_inner()
-            .map_err(|e| fail("writing", e.into_error()))?;
-        f.sync_all().map_err(|e| fail("syncing", e))?;
-        std::fs::rename(&tmp, path).map_err(|e| fail("renaming", e))?;
-        Ok(())
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<()> {
-    const LIST: usize = 10;
-    for f in &s.files {
-        write!(
-            out,
-            "file {} ({}): {} objects, {} skipped",
-            f.path, f.format, f.objects, f.skipped
-        )?;
-        if !f.other_types.is_empty() {
-            let o: Vec<String> = f
-                .other_types
-                .iter()
-                .map(|(k, v)| format!("{k} {v}"))
-                .collect();
-            write!(out, "; other city objects not read: {}", o.join(", "))?;
-        }
-        writeln!(out)?;
-    }
-    writeln!(
-        out,
-        "objects: {} ({} footprints, {} meshes, {} triangles)",
-        s.objects, s.footprint_objects, s.mesh_objects, s.triangles
-    )?;
-    writeln!(
-        out,
-        "blockers: {} objects gave blockers, {} gave none",
-        s.blocker_objects, s.no_blocker_objects
-    )?;
-    writeln!(
-        out,
-        "convex pieces: {} ({:.2} per blocker object)",
-        s.convex_pieces,
-        s.convex_pieces as f64 / s.blocker_objects.max(1) as f64
-    )?;
-    let st = |x: &summary::Stats| {
-        format!(
-            "min {:.1}, median {:.1}, mean {:.1}, p90 {:.1}, max {:.1}",
-            x.min, x.p50, x.mean, x.p90, x.max
-        )
-    };
-    writeln!(out, "object heights (m): {}", st(&s.heights))?;
-    writeln!(out, "blocker heights (m): {}", st(&s.blocker_heights))?;
-    writeln!(
-        out,
-        "origin (world): {:.3}, {:.3}, {:.3}",
-        s.origin[0], s.origin[1], s.origin[2]
-    )?;
-    writeln!(
-        out,
-        "extent (local): x {:.2}..{:.2}, y {:.2}..{:.2}, z {:.2}..{:.2} ({:.0} x {:.0} x {:.1} m)",
-        s.extent_min[0],
-        s.extent_max[0],
-        s.extent_min[1],
-        s.extent_max[1],
-        s.extent_min[2],
-        s.extent_max[2],
-        s.extent_max[0] - s.extent_min[0],
-        s.extent_max[1] - s.extent_min[1],
-        s.extent_max[2] - s.extent_min[2]
-    )?;
-    let section = |out: &mut dyn Write,
-                   title: &str,
-                   counts: &std::collections::BTreeMap<String, usize>,
-                   entries: &[summary::Entry]|
-     -> std::io::Result<()> {
-        if entries.is_empty() {
-            return writeln!(out, "{title}: none");
-        }
-        writeln!(out, "{title}: {}", entries.len())?;
-        for (k, v) in counts {
-            writeln!(out, "  {v:>6}  {k}")?;
-        }
-        for e in entries.iter().take(LIST) {
-            let obj = e.object.map(|i| format!("#{i} ")).unwrap_or_default();
-            writeln!(
-                out,
-                "    {obj}{:?} ({}, {}): {}",
-                e.name, e.file, e.location, e.reason
-            )?;
-        }
-        if entries.len() > LIST {
-            writeln!(
-                out,
-                "    ... {} more (--json lists all)",
-                entries.len() - LIST
-            )?;
-        }
-        Ok(())
-    };
-    section(out, "skipped objects", &s.skipped_by_reason, &s.skipped)?;
-    // Repairs move no point; counts are enough here, and --json lists each one.
-    writeln!(
-        out,
-        "repaired rings: {} in {} objects (--json lists each)",
-        s.repaired.len(),
-        s.repaired_objects
-    )?;
-    for (k, v) in &s.repaired_rings_by_kind {
-        writeln!(out, "  {v:>6}  {k}")?;
-    }
-    section(
-        out,
-        "geometry that gave no blocker",
-        &s.no_blocker_by_reason,
-        &s.no_blocker,
-    )?;
-    let t: Vec<String> = s
-        .timings
-        .iter()
-        .map(|(k, v)| format!("{k} {:.3} s", v))
-        .collect();
-    writeln!(out, "timings: {}", t.join(", "))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use std::io::{Error, ErrorKind};
-
-    fn dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("vocc-write-atomically-{name}"));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    /// A writer that fails with ENOSPC halfway, as on a full disk: an error that names the
-    /// output and says the disk is full, no temporary file, and the old output unchanged.
-    #[test]
-    fn a_full_disk_is_an_error_and_leaves_the_old_output() {
-        let d = dir("full");
-        let out = d.join("city.vocc");
-        std::fs::write(&out, b"old store").unwrap();
-        let e = write_atomically(&out, |w| {
-            w.write_all(&[7; 100_000])?;
-            Err(Error::from(ErrorKind::StorageFull))
-        })
-        .unwrap_err();
-        let msg = format!("{e:#}");
-        assert!(msg.contains("the disk is full"), "{msg}");
-        assert!(msg.contains(&out.display().to_string()), "{msg}");
-        assert!(msg.contains(".city.vocc.tmp"), "{msg}");
-        assert_eq!(std::fs::read(&out).unwrap(), b"old store");
-        assert!(!d.join(".city.vocc.tmp").exists(), "temporary file left");
-        // Without an old output, nothing is left at all.
-        let fresh = d.join("new.vocc");
-        assert!(write_atomically(&fresh, |_| Err(Error::from(ErrorKind::StorageFull))).is_err());
-        let left: Vec<_> = std::fs::read_dir(&d)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(left, ["city.vocc"], "only the old output remains");
-    }
-
-    #[test]
-    fn other_write_errors_name_the_output_but_not_a_full_disk() {
-        let d = dir("other");
-        let out = d.join("x.svg");
-        let e = write_atomically(&out, |_| Err(Error::other("boom"))).unwrap_err();
-        let msg = format!("{e:#}");
-        assert!(
-            msg.contains(&out.display().to_string()) && msg.contains("boom"),
-            "{msg}"
-        );
-        assert!(!msg.contains("disk is full"), "{msg}");
-        assert!(!out.exists() && !d.join(".x.svg.tmp").exists());
-        // A missing folder fails at creation, naming it.
-        let e = write_atomically(&d.join("no/such/dir/x.svg"), |_| Ok(())).unwrap_err();
-        assert!(format!("{e:#}").contains("creating"), "{e:#}");
-    }
-
-    #[test]
-    fn a_successful_write_replaces_the_output_and_leaves_no_temporary_file() {
-        let d = dir("ok");
-        let out = d.join("a.txt");
-        std::fs::write(&out, b"old").unwrap();
-        write_atomically(&out, |w| w.write_all(b"new")).unwrap();
-        assert_eq!(std::fs::read(&out).unwrap(), b"new");
-        assert!(!d.join(".a.txt.tmp").exists());
     }
 }

@@ -19,15 +19,8 @@ use vocc::runtime::format::{encode_blob, encode_frame, CellRecord, Store};
 use vocc::runtime::{CellId, Frame};
 use vocc::scene;
 
-use crate::{write_atomically, ReadArgs};
-
-pub fn read_store(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
-}
-
-pub fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<Store<'a>> {
-    Store::parse(bytes).with_context(|| format!("{} is not a valid vocc store", path.display()))
-}
+use crate::args::ReadArgs;
+use crate::files::{parse, read_store, write_atomically};
 
 fn cell_record(store: &Store, id: CellId) -> Result<CellRecord> {
     anyhow::ensure!(
@@ -297,62 +290,6 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
             );
         }
     }
-    Ok(())
-}
-
-/// `vocc render STORE SCENE... (--cell ID | --at X,Y)`: the cell's top view, with the
-/// single-building baseline baked for this one cell to tell fusion's share apart.
-pub fn render(
-    files: Vec<PathBuf>,
-    read: &ReadArgs,
-    cell: Option<CellId>,
-    at: Option<(f64, f64)>,
-    radius: f64,
-    output: &Path,
-) -> Result<()> {
-    let (store_path, scene_files) = files
-        .split_first()
-        .context("give the store, then the scene files")?;
-    anyhow::ensure!(
-        !scene_files.is_empty(),
-        "give the scene files after the store"
-    );
-    let bytes = read_store(store_path)?;
-    let store = parse(store_path, &bytes)?;
-    let id = which_cell(&store, cell, at)?;
-    let rec = store.cell(id)?;
-    let s = scene::load(scene_files, &read.options())?;
-    let f = *store.frame();
-    anyhow::ensure!(
-        f.origin == s.origin.to_array(),
-        "the store's origin is not the scene's: give the files the store was baked from"
-    );
-    let boxes = vocc::eval::metrics::object_boxes(&s);
-    let tree = BoxTree::new(&boxes);
-    let mut visible = Vec::new();
-    vocc::runtime::culler::pvs(&f, id, &rec, &tree, &mut visible);
-    // The baseline: this cell baked with single-building chains, same grid and eyes.
-    let mut params = vocc::bake::pipeline::BakeParams {
-        cell_size: f.grid.cell_size,
-        eye: (f.eye_lo, f.eye_hi),
-        ..Default::default()
-    };
-    params.grow.single_object = true;
-    let plan = vocc::bake::pipeline::Plan::new(&s, params)?;
-    let base_rec = plan.bake_cell(id).record;
-    let mut base_visible = Vec::new();
-    vocc::runtime::culler::pvs(&plan.frame, id, &base_rec, &tree, &mut base_visible);
-    let svg =
-        vocc::eval::picture::cell_picture(&s, &f, id, &rec, &visible, Some(&base_visible), radius);
-    write_atomically(output, |w| w.write_all(svg.as_bytes()))?;
-    eprintln!(
-        "cell {id}: {} VOs; {} of {} objects potentially visible ({} with single buildings alone); wrote {}",
-        rec.vos().len(),
-        visible.len(),
-        s.objects.len(),
-        base_visible.len(),
-        output.display()
-    );
     Ok(())
 }
 

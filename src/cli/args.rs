@@ -1,0 +1,94 @@
+//! Argument types and parsers shared by the subcommands: the scene readers' options
+//! ([`ReadArgs`]) and the value parsers of numeric options.
+//!
+//! Input: command-line strings. Output: typed values, or a message naming what was expected.
+//! Invariant: every numeric option is parsed here, by one rule (finite numbers, ranges checked
+//! at parse time), so a bad value is a usage error (exit status 2) whatever the option.
+
+use clap::Args;
+
+use vocc::bake::pipeline::Slices;
+use vocc::scene::ReadOptions;
+
+/// Options of the scene readers.
+#[derive(Args, Clone, Debug)]
+pub struct ReadArgs {
+    /// GeoJSON: attribute with the building height above its base, metres.
+    #[arg(long, value_name = "NAME")]
+    pub height_attr: Option<String>,
+    /// GeoJSON: attribute with the base elevation, metres (default: base at 0).
+    #[arg(long, value_name = "NAME")]
+    pub base_attr: Option<String>,
+    /// GeoJSON: attribute with the number of storeys, used when the height is missing.
+    #[arg(long, value_name = "NAME")]
+    pub levels_attr: Option<String>,
+    /// Metres per storey for --levels-attr.
+    #[arg(long, default_value_t = 3.0, value_name = "M")]
+    pub storey_height: f64,
+    /// CityJSON: level of detail to read (default: the highest each object has).
+    #[arg(long)]
+    pub lod: Option<String>,
+}
+
+impl ReadArgs {
+    pub fn options(&self) -> ReadOptions {
+        ReadOptions {
+            height_attr: self.height_attr.clone(),
+            base_attr: self.base_attr.clone(),
+            levels_attr: self.levels_attr.clone(),
+            storey_height: self.storey_height,
+            lod: self.lod.clone(),
+        }
+    }
+}
+
+/// Parses a finite number (the one number rule of every option).
+pub fn parse_num(t: &str) -> Result<f64, String> {
+    t.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| format!("{t:?} is not a finite number"))
+}
+
+/// Parses "X,Y".
+pub fn parse_xy(s: &str) -> Result<(f64, f64), String> {
+    let (x, y) = s
+        .split_once(',')
+        .ok_or_else(|| format!("expected X,Y, got {s:?}"))?;
+    Ok((parse_num(x)?, parse_num(y)?))
+}
+
+/// Parses "LOW..HIGH".
+pub fn parse_range(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("expected LOW..HIGH, got {s:?}"))?;
+    Ok((parse_num(a)?, parse_num(b)?))
+}
+
+/// Parses `auto` or a slice count 1 to 5.
+pub fn parse_slices(s: &str) -> Result<Slices, String> {
+    if s == "auto" {
+        return Ok(Slices::Auto);
+    }
+    match s.parse::<u8>() {
+        Ok(n @ 1..=5) => Ok(Slices::Fixed(n)),
+        _ => Err(format!("expected `auto` or 1 to 5, got {s:?}")),
+    }
+}
+
+/// Parses "X0,Y0,X1,Y1" with X0 <= X1 and Y0 <= Y1.
+pub fn parse_rect(s: &str) -> Result<[f64; 4], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| parse_num(t).ok())
+        .collect::<Option<Vec<f64>>>()
+        .ok_or_else(|| format!("expected four numbers X0,Y0,X1,Y1, got {s:?}"))?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 <= x1 && y0 <= y1 => Ok([x0, y0, x1, y1]),
+        _ => Err(format!(
+            "expected X0,Y0,X1,Y1 with X0 <= X1 and Y0 <= Y1, got {s:?}"
+        )),
+    }
+}

@@ -1,0 +1,141 @@
+//! `vocc info`: load scene files and report what was read.
+//!
+//! Input: scene files and reader options. Output: the load report on stdout, as text (the first
+//! ten entries of each list) or JSON (all of them). Invariant: reporting only; every figure is
+//! the library's (`scene::summary`).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use vocc::scene::{self, summary};
+
+use crate::args::ReadArgs;
+
+pub fn info(files: &[PathBuf], read: &ReadArgs, json: bool) -> Result<()> {
+    let s = scene::load(files, &read.options())?;
+    let sum = summary::summarize(&s);
+    let mut out = std::io::stdout().lock();
+    if json {
+        serde_json::to_writer_pretty(&mut out, &sum)?;
+        writeln!(out)?;
+    } else {
+        print_summary(&mut out, &sum)?;
+    }
+    Ok(())
+}
+
+fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<()> {
+    const LIST: usize = 10;
+    for f in &s.files {
+        write!(
+            out,
+            "file {} ({}): {} objects, {} skipped",
+            f.path, f.format, f.objects, f.skipped
+        )?;
+        if !f.other_types.is_empty() {
+            let o: Vec<String> = f
+                .other_types
+                .iter()
+                .map(|(k, v)| format!("{k} {v}"))
+                .collect();
+            write!(out, "; other city objects not read: {}", o.join(", "))?;
+        }
+        writeln!(out)?;
+    }
+    writeln!(
+        out,
+        "objects: {} ({} footprints, {} meshes, {} triangles)",
+        s.objects, s.footprint_objects, s.mesh_objects, s.triangles
+    )?;
+    writeln!(
+        out,
+        "blockers: {} objects gave blockers, {} gave none",
+        s.blocker_objects, s.no_blocker_objects
+    )?;
+    writeln!(
+        out,
+        "convex pieces: {} ({:.2} per blocker object)",
+        s.convex_pieces,
+        s.convex_pieces as f64 / s.blocker_objects.max(1) as f64
+    )?;
+    let st = |x: &summary::Stats| {
+        format!(
+            "min {:.1}, median {:.1}, mean {:.1}, p90 {:.1}, max {:.1}",
+            x.min, x.p50, x.mean, x.p90, x.max
+        )
+    };
+    writeln!(out, "object heights (m): {}", st(&s.heights))?;
+    writeln!(out, "blocker heights (m): {}", st(&s.blocker_heights))?;
+    writeln!(
+        out,
+        "origin (world): {:.3}, {:.3}, {:.3}",
+        s.origin[0], s.origin[1], s.origin[2]
+    )?;
+    writeln!(
+        out,
+        "extent (local): x {:.2}..{:.2}, y {:.2}..{:.2}, z {:.2}..{:.2} ({:.0} x {:.0} x {:.1} m)",
+        s.extent_min[0],
+        s.extent_max[0],
+        s.extent_min[1],
+        s.extent_max[1],
+        s.extent_min[2],
+        s.extent_max[2],
+        s.extent_max[0] - s.extent_min[0],
+        s.extent_max[1] - s.extent_min[1],
+        s.extent_max[2] - s.extent_min[2]
+    )?;
+    let section = |out: &mut dyn Write,
+                   title: &str,
+                   counts: &std::collections::BTreeMap<String, usize>,
+                   entries: &[summary::Entry]|
+     -> std::io::Result<()> {
+        if entries.is_empty() {
+            return writeln!(out, "{title}: none");
+        }
+        writeln!(out, "{title}: {}", entries.len())?;
+        for (k, v) in counts {
+            writeln!(out, "  {v:>6}  {k}")?;
+        }
+        for e in entries.iter().take(LIST) {
+            let obj = e.object.map(|i| format!("#{i} ")).unwrap_or_default();
+            writeln!(
+                out,
+                "    {obj}{:?} ({}, {}): {}",
+                e.name, e.file, e.location, e.reason
+            )?;
+        }
+        if entries.len() > LIST {
+            writeln!(
+                out,
+                "    ... {} more (--json lists all)",
+                entries.len() - LIST
+            )?;
+        }
+        Ok(())
+    };
+    section(out, "skipped objects", &s.skipped_by_reason, &s.skipped)?;
+    // Repairs move no point; counts are enough here, and --json lists each one.
+    writeln!(
+        out,
+        "repaired rings: {} in {} objects (--json lists each)",
+        s.repaired.len(),
+        s.repaired_objects
+    )?;
+    for (k, v) in &s.repaired_rings_by_kind {
+        writeln!(out, "  {v:>6}  {k}")?;
+    }
+    section(
+        out,
+        "geometry that gave no blocker",
+        &s.no_blocker_by_reason,
+        &s.no_blocker,
+    )?;
+    let t: Vec<String> = s
+        .timings
+        .iter()
+        .map(|(k, v)| format!("{k} {:.3} s", v))
+        .collect();
+    writeln!(out, "timings: {}", t.join(", "))
+}
