@@ -8,11 +8,13 @@ DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 build:
 	$(CARGO) build --release
 
-# The whole test suite, as CI runs it: all tests, the embeddable core without the geometry stack,
-# formatting.
+# The whole test suite, as CI runs it: all tests, the embeddable core without the geometry stack
+# (and that it depends on thiserror alone), formatting.
 test:
 	$(CARGO) test --locked
 	$(CARGO) test --locked --lib --no-default-features
+	@deps="$$($(CARGO) tree --locked --no-default-features -e normal --depth 1 --prefix none | awk 'NR > 1 {print $$1}' | sort -u | tr '\n' ' ')"; \
+	  test "$$deps" = "thiserror " || { echo "runtime dependencies: $$deps(ARCHITECTURE.md invariant 9 allows thiserror alone)" >&2; exit 1; }
 	$(CARGO) fmt --all -- --check
 
 # The main job on the bundled example: bake Lyon into an occluder store, then describe it.

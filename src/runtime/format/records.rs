@@ -1,0 +1,269 @@
+//! Cell records, the unit the store's payload and the blob share (FORMAT.md sections 5.2 and
+//! 5.4): one cell's ground level and at most 10 VOs, or "skipped".
+//!
+//! Input: a record's bytes and its index value (decoding), or a [`CellRecord`] (encoding).
+//! Output: the record, its size, its bytes.
+//! Invariants: a record is a fixed-size value ([`VoList`] holds its VOs inline, no heap);
+//! `record_size` is the one place that says how many payload bytes a count takes; decoding
+//! rejects a degenerate VO, encoding also a field out of range or an unstored ground level.
+
+use std::fmt;
+use std::ops::Deref;
+
+use super::{FormatError, Reader, SKIPPED, VO_BYTES};
+use crate::runtime::frame::{QVo, HEIGHT_LEVELS, MAX_VOS_PER_CELL, QUANT_STEPS};
+use crate::runtime::grid::CellId;
+
+const NO_VO: QVo = QVo {
+    x1: 0,
+    y1: 0,
+    x2: 0,
+    y2: 0,
+    level: 0,
+};
+
+/// At most [`MAX_VOS_PER_CELL`] VOs, inline (no heap). Dereferences to `&[QVo]`.
+#[derive(Clone, Copy)]
+pub struct VoList {
+    vos: [QVo; MAX_VOS_PER_CELL],
+    len: u8,
+}
+
+impl VoList {
+    /// The empty list.
+    pub const fn new() -> VoList {
+        VoList {
+            vos: [NO_VO; MAX_VOS_PER_CELL],
+            len: 0,
+        }
+    }
+
+    /// The list of `vos`, or [`FormatError::TooManyVos`] past [`MAX_VOS_PER_CELL`].
+    pub fn from_slice(vos: &[QVo]) -> Result<VoList, FormatError> {
+        let mut l = VoList::new();
+        for &q in vos {
+            l.push(q)
+                .map_err(|_| FormatError::TooManyVos { count: vos.len() })?;
+        }
+        Ok(l)
+    }
+
+    /// Appends `q`, or refuses when the list is full.
+    pub fn push(&mut self, q: QVo) -> Result<(), FormatError> {
+        let slot = self
+            .vos
+            .get_mut(self.len as usize)
+            .ok_or(FormatError::TooManyVos {
+                count: self.len as usize + 1,
+            })?;
+        *slot = q;
+        self.len += 1;
+        Ok(())
+    }
+
+    pub fn as_slice(&self) -> &[QVo] {
+        self.vos.get(..self.len as usize).unwrap_or(&[])
+    }
+}
+
+impl Default for VoList {
+    fn default() -> Self {
+        VoList::new()
+    }
+}
+
+impl Deref for VoList {
+    type Target = [QVo];
+    fn deref(&self) -> &[QVo] {
+        self.as_slice()
+    }
+}
+
+impl PartialEq for VoList {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl Eq for VoList {}
+
+impl fmt::Debug for VoList {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.as_slice()).finish()
+    }
+}
+
+/// One cell's stored content.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CellRecord {
+    /// The cell lies inside a building: no VOs, no ground (index value 255).
+    Skipped,
+    /// The cell's ground level (0 when the frame's ground is flat, and for a cell without VOs,
+    /// whose ground is not stored) and its VOs, most effective first.
+    Vos { ground: u8, vos: VoList },
+}
+
+impl CellRecord {
+    /// A cell without VOs.
+    pub const EMPTY: CellRecord = CellRecord::Vos {
+        ground: 0,
+        vos: VoList::new(),
+    };
+
+    /// The record of `vos` on ground level `ground`.
+    pub fn new(ground: u8, vos: &[QVo]) -> Result<CellRecord, FormatError> {
+        Ok(CellRecord::Vos {
+            ground,
+            vos: VoList::from_slice(vos)?,
+        })
+    }
+
+    /// The VOs (none for a skipped cell).
+    pub fn vos(&self) -> &[QVo] {
+        match self {
+            CellRecord::Skipped => &[],
+            CellRecord::Vos { vos, .. } => vos.as_slice(),
+        }
+    }
+
+    /// The ground level (0 for a skipped cell).
+    pub fn ground(&self) -> u8 {
+        match self {
+            CellRecord::Skipped => 0,
+            CellRecord::Vos { ground, .. } => *ground,
+        }
+    }
+
+    /// The cell's index value: its VO count, or [`SKIPPED`].
+    pub fn index_byte(&self) -> u8 {
+        match self {
+            CellRecord::Skipped => SKIPPED,
+            CellRecord::Vos { vos, .. } => vos.len() as u8,
+        }
+    }
+}
+
+/// VOs a valid index value announces (`None` for a reserved value).
+pub(super) fn count_of(value: u8) -> Option<u8> {
+    match value {
+        SKIPPED => Some(0),
+        v if v as usize <= MAX_VOS_PER_CELL => Some(v),
+        _ => None,
+    }
+}
+
+/// Payload bytes of a cell with `n` VOs.
+pub(super) fn record_size(n: u8, ground_byte: bool) -> u64 {
+    if n == 0 {
+        0
+    } else {
+        n as u64 * VO_BYTES as u64 + ground_byte as u64
+    }
+}
+
+/// Decodes one record of `n >= 1` VOs from exactly its bytes; `offset` is where `bytes` starts
+/// in the file or blob (for errors).
+pub(super) fn read_record(
+    cell: CellId,
+    n: u8,
+    ground_byte: bool,
+    bytes: &[u8],
+    offset: u64,
+) -> Result<CellRecord, FormatError> {
+    let short = || FormatError::Truncated {
+        needed: offset + record_size(n, ground_byte),
+        got: offset + bytes.len() as u64,
+    };
+    let mut r = Reader::new(bytes);
+    let ground = if ground_byte {
+        r.u8().ok_or_else(short)?
+    } else {
+        0
+    };
+    let mut vos = VoList::new();
+    for k in 0..n {
+        let q = QVo::from_bytes(r.take::<VO_BYTES>().ok_or_else(short)?);
+        if q.is_degenerate() {
+            return Err(FormatError::DegenerateVo {
+                cell,
+                vo: k,
+                offset: offset + ground_byte as u64 + k as u64 * VO_BYTES as u64,
+            });
+        }
+        vos.push(q)?;
+    }
+    Ok(CellRecord::Vos { ground, vos })
+}
+
+/// Checks one record for encoding and returns its payload size. `offset` is where the record
+/// will start (for errors).
+pub(super) fn check_record(
+    cell: CellId,
+    rec: &CellRecord,
+    ground_byte: bool,
+    offset: u64,
+) -> Result<u64, FormatError> {
+    let CellRecord::Vos { ground, vos } = rec else {
+        return Ok(0);
+    };
+    if *ground != 0 && (vos.is_empty() || !ground_byte) {
+        return Err(FormatError::GroundNotStored {
+            cell,
+            ground: *ground,
+        });
+    }
+    for (k, q) in vos.iter().enumerate() {
+        let k8 = k as u8;
+        if [q.x1, q.y1, q.x2, q.y2].iter().any(|&c| c >= QUANT_STEPS) || q.level >= HEIGHT_LEVELS {
+            return Err(FormatError::VoOutOfRange { cell, vo: k8 });
+        }
+        if q.is_degenerate() {
+            return Err(FormatError::DegenerateVo {
+                cell,
+                vo: k8,
+                offset: offset + ground_byte as u64 + (k * VO_BYTES) as u64,
+            });
+        }
+    }
+    Ok(record_size(vos.len() as u8, ground_byte))
+}
+
+pub(super) fn push_record(out: &mut Vec<u8>, rec: &CellRecord, ground_byte: bool) {
+    if let CellRecord::Vos { ground, vos } = rec {
+        if !vos.is_empty() {
+            if ground_byte {
+                out.push(*ground);
+            }
+            for q in vos.iter() {
+                out.extend_from_slice(&q.to_bytes());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_util::q;
+    use super::*;
+
+    #[test]
+    fn vo_list_holds_at_most_ten() {
+        let v = q(1, 2, 3, 4, 5);
+        let mut l = VoList::new();
+        for _ in 0..MAX_VOS_PER_CELL {
+            l.push(v).unwrap();
+        }
+        assert_eq!(l.len(), 10);
+        assert_eq!(l.push(v), Err(FormatError::TooManyVos { count: 11 }));
+        assert_eq!(
+            VoList::from_slice(&[v; 11]),
+            Err(FormatError::TooManyVos { count: 11 })
+        );
+        // Equality looks at the VOs only.
+        let mut a = VoList::from_slice(&[v, v]).unwrap();
+        let b = VoList::from_slice(&[v]).unwrap();
+        assert_ne!(a, b);
+        a.len = 1;
+        assert_eq!(a, b);
+    }
+}
