@@ -2,7 +2,8 @@
 //! whole-scene time at 1 and 2 threads, with the speed-up and the store's size.
 //! `make bench` runs it (`cargo bench --bench bake`); it prints a table.
 //!
-//! Per-cell times are wall-clock times of `Plan::bake_cell`, measured while the pool runs at the
+//! The bake is the library job (`bake::job::BakeJob`, what `vocc bake` runs); the whole-bake time
+//! includes its content hashes and encoding. Per-cell times are wall-clock times of `Plan::bake_cell`, measured while the pool runs at the
 //! given thread count (so at 2 threads they include the contention of two busy cores). A
 //! distribution's p95 is the figure asked for, which criterion's summary does not give; the
 //! µs-scale culler is measured with criterion (`benches/culler.rs`).
@@ -10,7 +11,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use vocc::bake::pipeline::{bake_cells, encode, records, BakeParams, Plan};
+use vocc::bake::job::BakeJob;
+use vocc::bake::pipeline::BakeParams;
 use vocc::scene::{self, ReadOptions};
 
 fn pct(v: &[f64], p: f64) -> f64 {
@@ -31,8 +33,10 @@ fn main() {
         },
     )
     .expect("Lyon loads");
-    let plan = Plan::new(&s, BakeParams::default()).unwrap();
-    let cells = plan.cells();
+    let cells = BakeJob::new(&s, BakeParams::default())
+        .unwrap()
+        .selected()
+        .unwrap();
     println!(
         "Lyon, {} cells of 100 m, {} blockers, {} objects",
         cells.len(),
@@ -44,25 +48,24 @@ fn main() {
     let mut base = None;
     let mut first: Option<Vec<u8>> = None;
     for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+        let job = BakeJob::new(&s, BakeParams::default())
+            .unwrap()
+            .threads(threads);
         let t = Instant::now();
-        let baked = pool.install(|| bake_cells(&plan, &cells, &|_| {}));
+        let out = job.run(&|_| {}).unwrap();
         let secs = t.elapsed().as_secs_f64();
-        let ms: Vec<f64> = baked.iter().map(|c| c.stats.ms).collect();
-        let recs = records(&plan.frame, &baked);
-        let bytes = encode(&plan.frame, &baked).unwrap();
-        let vos: usize = recs.iter().map(|r| r.vos().len()).sum();
+        let ms: Vec<f64> = out.cells.iter().map(|c| c.stats.ms).collect();
+        let cells_in_grid = out.summary.grid.cells as f64;
+        let vos = out.summary.vos;
+        let bytes = out.store;
         let b = *base.get_or_insert(secs);
         println!(
             "| {threads} | {:.1} | {:.1} | {secs:.2} | {:.2}x | {:.2} | {:.1} |",
             pct(&ms, 0.5),
             pct(&ms, 0.95),
             b / secs,
-            vos as f64 / recs.len() as f64,
-            bytes.len() as f64 / recs.len() as f64
+            vos as f64 / cells_in_grid,
+            bytes.len() as f64 / cells_in_grid
         );
         match &first {
             None => first = Some(bytes),

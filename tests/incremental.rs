@@ -13,9 +13,10 @@ use std::process::Command;
 
 use common::{lyon_options, repo, temp_dir, LYON};
 use serde_json::Value;
-use vocc::bake::incremental::{hashes_path, CellHashes};
-use vocc::bake::pipeline::{bake_cells, encode, records, BakeParams, Plan};
-use vocc::runtime::format::{encode_store, Store};
+use vocc::bake::incremental::hashes_path;
+use vocc::bake::job::BakeJob;
+use vocc::bake::pipeline::BakeParams;
+use vocc::runtime::format::Store;
 use vocc::scene::{self, Scene};
 
 fn load(json: &Value, name: &str) -> Scene {
@@ -57,33 +58,37 @@ fn shift(v: &mut Value, dx: f64) {
     }
 }
 
-/// (cells rebaked, cells baked) for `new` given the bake of `old`, and checks the bytes equal a
-/// full bake of `new`.
+/// (cells rebaked, cells baked) for `new` given the bake of `old` (the library job with the old
+/// store's bytes and hashes), and checks the bytes equal a full bake of `new`.
 fn rebake(old: &Scene, new: &Scene, what: &str) -> (usize, usize) {
-    let old_plan = Plan::new(old, BakeParams::default()).unwrap();
-    let old_cells = old_plan.cells();
-    let old_baked = bake_cells(&old_plan, &old_cells, &|_| {});
-    let old_hashes = CellHashes::new(&old_plan, &old_cells);
-
-    let plan = Plan::new(new, BakeParams::default()).unwrap();
+    let old_out = BakeJob::new(old, BakeParams::default())
+        .unwrap()
+        .run(&|_| {})
+        .unwrap();
+    let job = BakeJob::new(new, BakeParams::default()).unwrap();
     assert_eq!(
-        plan.frame, old_plan.frame,
+        &job.plan().frame,
+        Store::parse(&old_out.store).unwrap().frame(),
         "{what}: the edit moved the frame"
     );
-    let cells = plan.cells();
-    let hashes = CellHashes::new(&plan, &cells);
-    let changed = hashes.changed(&old_hashes, &cells);
-    let mut recs = records(&old_plan.frame, &old_baked);
-    for c in bake_cells(&plan, &changed, &|_| {}) {
-        recs[c.id as usize] = c.record;
-    }
-    let incremental = encode_store(&plan.frame, &recs).unwrap();
-    let full = encode(&plan.frame, &bake_cells(&plan, &cells, &|_| {})).unwrap();
+    let inc = job
+        .reuse(old_out.store.clone(), Some(old_out.hashes.clone()))
+        .run(&|_| {})
+        .unwrap();
+    let full = BakeJob::new(new, BakeParams::default())
+        .unwrap()
+        .run(&|_| {})
+        .unwrap();
     assert!(
-        incremental == full,
+        inc.store == full.store,
         "{what}: the incremental store differs from a full bake"
     );
-    (changed.len(), cells.len())
+    assert_eq!(inc.hashes, full.hashes, "{what}: hashes differ");
+    let r = inc.summary.reuse.expect("a reuse decision");
+    assert_eq!(r.refused, None, "{what}: reuse refused");
+    assert_eq!(r.changed, inc.cells.len());
+    assert_eq!(r.changed + r.reused, inc.summary.cells_selected);
+    (r.changed, inc.summary.cells_selected)
 }
 
 #[test]
@@ -93,13 +98,24 @@ fn one_building_edits_of_lyon_rebake_a_neighbourhood_and_match_a_full_bake() {
     let old = load(&json, "old");
     let k = central_feature(&json);
 
-    let plan = Plan::new(&old, BakeParams::default()).unwrap();
-    let cells = plan.cells();
-    let h = CellHashes::new(&plan, &cells);
-    assert!(
-        h.changed(&h, &cells).is_empty(),
+    // An unchanged scene rebakes nothing: the job reuses every cell of its own bake.
+    let first = BakeJob::new(&old, BakeParams::default())
+        .unwrap()
+        .run(&|_| {})
+        .unwrap();
+    let again = BakeJob::new(&old, BakeParams::default())
+        .unwrap()
+        .reuse(first.store.clone(), Some(first.hashes.clone()))
+        .run(&|_| {})
+        .unwrap();
+    assert_eq!(again.store, first.store);
+    let r = again.summary.reuse.unwrap();
+    assert_eq!(
+        (r.refused, r.changed),
+        (None, 0),
         "an unchanged scene rebakes nothing"
     );
+    assert_eq!(again.summary.ms_per_cell_median, None, "no cell baked");
 
     // Deleting a feature mid-file shifts every later object index; appending one adds an index.
     let mut edited = json.clone();

@@ -5,12 +5,14 @@
 //! virtual occluders behind them), [`spine`] and [`scan`] (optional: VOs through blocks of touching
 //! buildings; long hidden runs of lines around the cell),
 //! [`decimate`] (the few most effective), [`quantize`] (5 bytes,
-//! conservatively). [`pipeline`] orchestrates them per cell and over cells; [`svg`] draws one
-//! cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
+//! conservatively). [`pipeline`] orchestrates them per cell and over cells; [`job`] is the whole
+//! bake as one library call (selection, shards, reuse, hashes, encoding, summary); [`svg`] draws
+//! one cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
 //! dequantized form; a VO that fails is shrunk or dropped and counted.
 
 pub mod decimate;
 pub mod incremental;
+pub mod job;
 pub mod pipeline;
 pub mod quantize;
 pub mod scan;

@@ -10,14 +10,13 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use vocc::bake::incremental::{hashes_path, CellHashes};
-use vocc::bake::pipeline::{self, BakeParams, Plan, Slices};
-use vocc::runtime::crc::crc32;
-use vocc::runtime::format::{encode_frame, encode_store, CellRecord};
+use vocc::bake::incremental::hashes_path;
+use vocc::bake::job::{BakeJob, BakeSummary, JobError, Progress, ReuseRefusal};
+use vocc::bake::pipeline::{BakeParams, Slices};
 use vocc::scene;
 
 use crate::args::{parse_range, parse_rect, parse_slices, ReadArgs};
-use crate::files::write_atomically;
+use crate::files::{parse, read_store, write_atomically};
 
 #[derive(Args)]
 pub struct BakeArgs {
@@ -122,49 +121,15 @@ pub fn shard(
     Ok((i, n))
 }
 
-/// The hashes and bytes of the older store `old` when its cells may be reused under `plan`;
-/// `None` (every cell is baked, and the reason is printed) when its hashes are missing, belong
-/// to another store, or its frame differs.
-fn reusable(
-    old: &std::path::Path,
-    plan: &Plan,
-    hashes: &CellHashes,
-) -> Result<Option<(CellHashes, Vec<u8>)>> {
-    let bytes = crate::files::read_store(old)?;
-    let store = crate::files::parse(old, &bytes)?;
-    let hp = hashes_path(old);
-    let old_hashes = match std::fs::read(&hp) {
-        Ok(b) => CellHashes::decode(&b).with_context(|| format!("{} is damaged", hp.display()))?,
-        Err(e) => {
-            eprintln!(
-                "incremental: cannot read {} ({e}); baking every cell",
-                hp.display()
-            );
-            return Ok(None);
-        }
-    };
-    let why = if old_hashes.store_crc != crc32(&bytes) {
-        Some(format!("{} belongs to another store", hp.display()))
-    } else if encode_frame(store.frame()) != encode_frame(&plan.frame) {
-        Some("the grid, origin, eyes, ground range or quantization changed".to_string())
-    } else if old_hashes.global != hashes.global {
-        Some("the options or the vocc version changed".to_string())
-    } else {
-        None
-    };
-    if let Some(why) = why {
-        eprintln!("incremental: {why}; baking every cell");
-        return Ok(None);
-    }
-    Ok(Some((old_hashes, bytes)))
-}
-
 pub fn run(a: BakeArgs) -> Result<()> {
     let t0 = Instant::now();
     let shard = match &a.shard {
         Some(spec) => Some(shard(spec, a.shard_count, &|k| std::env::var(k).ok())?),
         None => None,
     };
+    if let Some(n) = a.threads {
+        anyhow::ensure!(n >= 1, "--threads must be at least 1");
+    }
     let s = scene::load(&a.scene, &a.read.options())?;
     let load_s = t0.elapsed().as_secs_f64();
     let region = a.region.map(|[x0, y0, x1, y1]| {
@@ -190,67 +155,68 @@ pub fn run(a: BakeArgs) -> Result<()> {
         region,
         ..BakeParams::default()
     };
-    let plan = Plan::new(&s, params)?;
-    let mut cells = plan.cells();
+    let mut job = BakeJob::new(&s, params)?;
     if let Some((i, n)) = shard {
-        cells.retain(|id| id % n == i);
-        eprintln!("shard {i}/{n}: {} cells", cells.len());
+        job = job.shard(i, n)?;
+        eprintln!("shard {i}/{n}: {} cells", job.selected()?.len());
     }
-    let hashes = CellHashes::new(&plan, &cells);
-    let reused_from = match &a.reuse {
-        Some(old) => reusable(old, &plan, &hashes)?,
-        None => None,
-    };
-    let (to_bake, reused): (Vec<u32>, Vec<(u32, CellRecord)>) = match &reused_from {
-        Some((old_hashes, old_bytes)) => {
-            let old_store = vocc::runtime::format::Store::parse(old_bytes)?;
-            let bake = hashes.changed(old_hashes, &cells);
-            let mut reused = Vec::with_capacity(cells.len() - bake.len());
-            for &id in &cells {
-                if bake.binary_search(&id).is_err() {
-                    reused.push((id, old_store.cell(id)?));
-                }
-            }
-            (bake, reused)
-        }
-        None => (cells.clone(), Vec::new()),
-    };
-    if let Some(old) = &a.reuse {
-        eprintln!(
-            "incremental: {} of {} cells changed since {}, {} reused",
-            to_bake.len(),
-            cells.len(),
-            old.display(),
-            reused.len()
-        );
-    }
-    let cells = to_bake;
-    let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = a.threads {
-        anyhow::ensure!(n >= 1, "--threads must be at least 1");
-        pool = pool.num_threads(n);
+        job = job.threads(n);
     }
-    let pool = pool.build().context("cannot start the worker threads")?;
-    let bar = indicatif::ProgressBar::new(cells.len() as u64);
+    if let Some(old) = &a.reuse {
+        let bytes = read_store(old)?;
+        parse(old, &bytes)?;
+        let hp = hashes_path(old);
+        let hashes = match std::fs::read(&hp) {
+            Ok(b) => Some(b),
+            Err(e) => {
+                eprintln!("incremental: cannot read {} ({e})", hp.display());
+                None
+            }
+        };
+        job = job.reuse(bytes, hashes);
+    }
+    let bar = indicatif::ProgressBar::new(0);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "baking {bar:40} {pos}/{len} cells, {elapsed} elapsed, about {eta} left",
         )
         .expect("a valid template"),
     );
-    let t1 = Instant::now();
-    let baked = pool.install(|| {
-        pipeline::bake_cells(&plan, &cells, &|_| {
-            bar.inc(1);
+    let out = job
+        .run(&|p: Progress| {
+            if p.done == 0 {
+                bar.set_length(p.total as u64);
+            } else {
+                bar.inc(1);
+            }
         })
-    });
+        .map_err(|e| match (&e, &a.reuse) {
+            (JobError::OldHashes(_), Some(old)) => {
+                anyhow::Error::new(e).context(format!("{} is damaged", hashes_path(old).display()))
+            }
+            _ => e.into(),
+        })?;
     bar.finish_and_clear();
-    let bake_s = t1.elapsed().as_secs_f64();
-    let mut records = pipeline::records(&plan.frame, &baked);
-    for (id, rec) in reused {
-        records[id as usize] = rec;
+    let sum = &out.summary;
+    if let (Some(r), Some(old)) = (&sum.reuse, &a.reuse) {
+        match r.refused {
+            Some(ReuseRefusal::OtherStore) => eprintln!(
+                "incremental: {} belongs to another store; baking every cell",
+                hashes_path(old).display()
+            ),
+            Some(why) => eprintln!("incremental: {why}; baking every cell"),
+            None => {}
+        }
+        eprintln!(
+            "incremental: {} of {} cells changed since {}, {} reused",
+            r.changed,
+            sum.cells_selected,
+            old.display(),
+            r.reused
+        );
     }
-    let bytes = encode_store(&plan.frame, &records)?;
+
     // The old hashes go first, the new ones last: a run stopped in between leaves a store
     // without hashes (the next `--reuse` bakes every cell), never a store with stale hashes.
     let hashes_file = hashes_path(&a.output);
@@ -260,63 +226,42 @@ pub fn run(a: BakeArgs) -> Result<()> {
         }
         _ => {}
     }
-    write_atomically(&a.output, |w| std::io::Write::write_all(w, &bytes))?;
-    let hashes = CellHashes {
-        store_crc: crc32(&bytes),
-        ..hashes
-    };
-    write_atomically(&hashes_file, |w| {
-        std::io::Write::write_all(w, &hashes.encode())
-    })?;
+    write_atomically(&a.output, |w| std::io::Write::write_all(w, &out.store))?;
+    write_atomically(&hashes_file, |w| std::io::Write::write_all(w, &out.hashes))?;
+    print_summary(sum, load_s, &a.output);
+    Ok(())
+}
 
-    let n = baked.len().max(1);
-    let vos: usize = records.iter().map(|r| r.vos().len()).sum();
-    let most = records.iter().map(|r| r.vos().len()).max().unwrap_or(0);
-    let skipped = records
-        .iter()
-        .filter(|r| matches!(r, CellRecord::Skipped))
-        .count();
-    let mut ms: Vec<f64> = baked.iter().map(|c| c.stats.ms).collect();
-    ms.sort_by(f64::total_cmp);
-    let pct = |p: f64| {
-        ms.get(((ms.len() as f64 - 1.0) * p) as usize)
-            .copied()
-            .unwrap_or(0.0)
-    };
-    let (tried, shrunk, dropped, checks) = baked.iter().fold((0, 0, 0, 0), |(t, s, d, k), c| {
-        (
-            t + c.stats.tried,
-            s + c.stats.shrunk,
-            d + c.stats.dropped,
-            k + c.stats.checks,
-        )
-    });
-    let g = &plan.frame.grid;
+/// The bake's summary, three lines on stderr.
+fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
+    let g = &sum.grid;
     eprintln!(
         "grid {} x {} cells of {} m; baked {} cells ({} skipped: inside a building) in {:.1} s on {} threads (scene loaded in {:.1} s)",
         g.nx,
         g.ny,
         g.cell_size,
-        baked.len(),
-        skipped,
-        bake_s,
-        pool.current_num_threads(),
+        sum.cells_baked,
+        sum.cells_skipped,
+        sum.timings.bake_s,
+        sum.threads,
         load_s
     );
+    let q = &sum.quantization;
+    let ms = match (sum.ms_per_cell_median, sum.ms_per_cell_p95) {
+        (Some(m), Some(p)) => format!("per baked cell {m:.1} ms median, {p:.1} ms p95"),
+        _ => "no cell baked".to_string(),
+    };
     eprintln!(
-        "VOs: {vos} ({:.2} per baked cell, at most {most}); per cell {:.1} ms median, {:.1} ms p95; quantization: {tried} tried, {shrunk} shrunk, {dropped} dropped, {checks} exact checks",
-        vos as f64 / n as f64,
-        pct(0.5),
-        pct(0.95)
+        "VOs: {} in {} cells ({:.2} per cell, at most {}); {ms}; quantization: {} tried, {} shrunk, {} dropped, {} exact checks",
+        sum.vos, sum.cells_selected, sum.vos_per_cell, sum.max_vos, q.tried, q.shrunk, q.dropped, q.checks
     );
     eprintln!(
         "wrote {} bytes to {} ({:.1} bytes per cell over {} cells)",
-        bytes.len(),
-        a.output.display(),
-        bytes.len() as f64 / records.len().max(1) as f64,
-        records.len()
+        sum.store_bytes,
+        output.display(),
+        sum.bytes_per_cell,
+        g.cells
     );
-    Ok(())
 }
 
 #[cfg(test)]

@@ -12,7 +12,8 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::bake::pipeline::{bake_cells, encode, BakeParams, CellBake, Plan, Slices};
+use crate::bake::job::BakeJob;
+use crate::bake::pipeline::{BakeParams, CellBake, Plan, Slices};
 use crate::runtime::culler::BoxTree;
 use crate::runtime::format::{encode_store, CellRecord, Store};
 use crate::runtime::CellId;
@@ -49,17 +50,18 @@ pub struct Baked {
     pub seconds: f64,
 }
 
-/// Bakes `cells` (all of the plan's when `None`) into a store.
+/// Bakes `cells` (all of the plan's when `None`) into a store, on the current rayon pool
+/// ([`BakeJob`]).
 pub fn bake(scene: &Scene, params: BakeParams, cells: Option<&[CellId]>) -> Baked {
-    let plan = Plan::new(scene, params).expect("valid bake parameters");
-    let ids = cells.map_or_else(|| plan.cells(), |c| c.to_vec());
-    let t = Instant::now();
-    let baked = bake_cells(&plan, &ids, &|_| {});
-    let seconds = t.elapsed().as_secs_f64();
+    let mut job = BakeJob::new(scene, params).expect("valid bake parameters");
+    if let Some(ids) = cells {
+        job = job.cells(ids).expect("cells of the grid");
+    }
+    let out = job.run(&|_| {}).expect("the bake runs");
     Baked {
-        bytes: encode(&plan.frame, &baked).expect("the bake's records encode"),
-        cells: baked,
-        seconds,
+        bytes: out.store,
+        cells: out.cells,
+        seconds: out.summary.timings.bake_s,
     }
 }
 
