@@ -76,3 +76,42 @@ fn stored_vos_with_scan_runs_pass_rule_2_and_rule_1_from_their_bytes() {
     assert!(cells_with_vos >= 6, "only {cells_with_vos} cells got VOs");
     assert!(checked >= 30, "only {checked} VOs checked");
 }
+
+/// Lyon with every convex piece replaced by its edges as wall segments (2-vertex blockers) of
+/// the same base and top: the walls lie inside the footprint prisms, which the oracles still use.
+fn lyon_walls_only() -> Scene {
+    let mut s = load_lyon();
+    s.blockers = s
+        .blockers
+        .iter()
+        .flat_map(|b| {
+            let n = b.polygon.len();
+            (0..n).map(move |i| vocc::scene::Blocker {
+                polygon: vec![b.polygon[i], b.polygon[(i + 1) % n]],
+                ..b.clone()
+            })
+        })
+        .collect();
+    s
+}
+
+#[test]
+fn stored_vos_from_wall_segments_alone_pass_rule_2_and_rule_1_from_their_bytes() {
+    // The old growth, spines and scan runs take 2-vertex blockers without panicking, and
+    // every VO they give is stored only after the verifier certified it over the walls.
+    let s = lyon_walls_only();
+    let [x0, y0, x1, y1] = region(&s);
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let params = BakeParams {
+        region: Some([cx - 60.0, cy - 1.0, cx + 1.0, cy + 1.0]),
+        spines: 64,
+        scan: true,
+        ..BakeParams::default()
+    };
+    let baked = bake(&s, params, None);
+    let store = Store::parse(&baked.bytes).expect("the bake writes a valid store");
+    let (cells_with_vos, checked) = check_stored_vos(&s, &store);
+    eprintln!("{cells_with_vos} cells, {checked} VOs");
+    assert!(cells_with_vos >= 2, "only {cells_with_vos} cells got VOs");
+    assert!(checked >= 10, "only {checked} VOs checked");
+}

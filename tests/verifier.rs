@@ -238,3 +238,226 @@ fn verifier_tightness_over_dense_random_scenes() {
     assert!(cert_total >= 0.97 * brute_total, "verifier too loose");
     assert!(fused >= 10, "fusion is not exercised");
 }
+
+// ---- Segment blockers (walls seen from above: 2-vertex blockers) ----
+
+/// The four walls of a rectangle, as segments (an open box seen from above).
+fn walls_of(r: &[DVec2]) -> Vec<Vec<DVec2>> {
+    (0..r.len())
+        .map(|i| vec![r[i], r[(i + 1) % r.len()]])
+        .collect()
+}
+
+#[test]
+fn single_wall_umbra_is_certified_and_its_penumbra_is_not() {
+    let cell = rect(0.0, 0.0, 10.0, 10.0);
+    // One wall from (-10,20) to (20,20): outer tangents (0,0)-(-10,20) and (10,0)-(20,20).
+    let blockers = vec![vec![v(-10.0, 20.0), v(20.0, 20.0)]];
+    let ver = Verifier::new(&cell, blockers.iter().map(|b| b.as_slice()));
+    assert!(ver.is_hidden(v(-20.0, 40.0), v(30.0, 40.0)));
+    let parts = ver.hidden_parts(v(-60.0, 40.0), v(30.0, 40.0));
+    assert_sound(&cell, &blockers, &parts);
+    let h = parts[0];
+    assert!(h.p0.x >= -20.0 && h.p0.x < -20.0 + 0.05, "{h:?}");
+    assert_eq!(h.p1, v(30.0, 40.0));
+    // Reversed vertex order: the same wall.
+    let rev = [vec![v(20.0, 20.0), v(-10.0, 20.0)]];
+    let ver = Verifier::new(&cell, rev.iter().map(|b| b.as_slice()));
+    assert!(ver.is_hidden(v(-20.0, 40.0), v(30.0, 40.0)));
+    assert!(!ver.is_hidden(v(-21.0, 40.0), v(30.0, 40.0)));
+    // A segment lying on the wall is hidden (every segment to it meets the wall there).
+    assert!(ver.is_hidden(v(-5.0, 20.0), v(15.0, 20.0)));
+}
+
+#[test]
+fn vo_on_a_radial_walls_line_beyond_its_end_is_not_in_the_wall() {
+    // Regression: point_in_convex on a 2-vertex polygon said Boundary for every point of its
+    // line (both edge tests collinear). A VO on the line of a wall that points at the cell, past
+    // the wall's far end, then had both ends "in" the wall, and the verifier's shortcut for a
+    // piece inside one blocker certified it, though the cell sees it on both sides of the wall.
+    let cell = rect(0.0, 0.0, 10.0, 10.0);
+    let blockers = vec![vec![v(5.0, 20.0), v(5.0, 30.0)]];
+    let ver = Verifier::new(&cell, blockers.iter().map(|b| b.as_slice()));
+    assert!(!ver.is_hidden(v(5.0, 35.0), v(5.0, 40.0)));
+    assert!(ver.hidden_parts(v(5.0, 35.0), v(5.0, 40.0)).is_empty());
+    assert!(!brute_hidden(&cell, &blockers, v(5.0, 37.0), 400));
+    // On the wall itself it is hidden: every segment to it meets the wall there.
+    assert!(ver.is_hidden(v(5.0, 22.0), v(5.0, 28.0)));
+}
+
+#[test]
+fn walls_meeting_at_a_corner_fuse_and_radial_walls_hide_nothing() {
+    let cell = rect(0.0, 0.0, 10.0, 10.0);
+    // An L of two walls meeting at (5, 20): together as wide as the single wall above.
+    let blockers = vec![
+        vec![v(-10.0, 20.0), v(5.0, 20.0)],
+        vec![v(5.0, 20.0), v(20.0, 20.0)],
+    ];
+    let ver = Verifier::new(&cell, blockers.iter().map(|b| b.as_slice()));
+    assert!(ver.is_hidden(v(-20.0, 40.0), v(30.0, 40.0)));
+    for one in &blockers {
+        let alone = Verifier::new(&cell, [one.as_slice()]);
+        assert!(!alone.is_hidden(v(-20.0, 40.0), v(30.0, 40.0)));
+    }
+    // A wall bent back (a real corner): the second leg runs away from the cell.
+    let bent = vec![
+        vec![v(-10.0, 20.0), v(10.0, 20.0)],
+        vec![v(10.0, 20.0), v(14.0, 30.0)],
+    ];
+    let ver = Verifier::new(&cell, bent.iter().map(|b| b.as_slice()));
+    let parts = ver.hidden_parts(v(-30.0, 50.0), v(40.0, 50.0));
+    assert_sound(&cell, &bent, &parts);
+    assert!(hidden_len(&parts) > 10.0, "{parts:?}");
+    // Walls pointing at the cell centre hide nothing beyond them: a point behind one is on its
+    // line, seen from the cell's points on either side.
+    let c = v(5.0, 5.0);
+    let radial: Vec<Vec<DVec2>> = (0..9)
+        .map(|k| {
+            let t = std::f64::consts::PI * (0.1 + 0.1 * k as f64);
+            let d = v(t.cos(), t.sin());
+            vec![c + d * 20.0, c + d * 40.0]
+        })
+        .collect();
+    let ver = Verifier::new(&cell, radial.iter().map(|b| b.as_slice()));
+    assert!(ver.hidden_parts(v(-60.0, 50.0), v(70.0, 50.0)).is_empty());
+}
+
+#[test]
+fn open_boxes_hide_what_their_rectangles_hide() {
+    // The four walls of a rectangle hide from an outside cell exactly what the rectangle hides:
+    // a segment from outside into the rectangle crosses its boundary. The verifier should
+    // certify about as much from the walls as from the solid prisms.
+    let cell = rect(0.0, 0.0, 10.0, 10.0);
+    let mut rng = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut solid_total, mut wall_total) = (0.0, 0.0);
+    for _ in 0..12 {
+        let rects: Vec<Vec<DVec2>> = (0..8)
+            .map(|_| {
+                let x = (-60.0 + next() * 130.0).round();
+                let y = (15.0 + next() * 20.0).round();
+                let (w, h) = ((3.0 + next() * 12.0).round(), (2.0 + next() * 8.0).round());
+                rect(x, y, x + w, y + h)
+            })
+            .collect();
+        let walls: Vec<Vec<DVec2>> = rects.iter().flat_map(|r| walls_of(r)).collect();
+        let (a, b) = (v(-120.0, 80.0), v(130.0, 80.0));
+        let solid = Verifier::new(&cell, rects.iter().map(|b| b.as_slice())).hidden_parts(a, b);
+        let parts = Verifier::new(&cell, walls.iter().map(|b| b.as_slice())).hidden_parts(a, b);
+        assert_sound(&cell, &walls, &parts);
+        solid_total += hidden_len(&solid);
+        wall_total += hidden_len(&parts);
+    }
+    eprintln!("walls certify {wall_total:.1} m, the solid rectangles {solid_total:.1} m");
+    assert!(solid_total > 200.0, "scenes too sparse to test anything");
+    assert!(wall_total >= 0.97 * solid_total, "walls certify too little");
+}
+
+/// A random wall: a segment in the field beyond the cell, any direction.
+fn wall() -> impl Strategy<Value = Vec<DVec2>> {
+    (-40i32..50, 14i32..60, 1i32..40, 0i32..32).prop_map(|(cx, cy, len, rot)| {
+        let t = rot as f64 * std::f64::consts::PI / 16.0;
+        let (c, s) = (t.cos(), t.sin());
+        let h = len as f64 * 0.5;
+        let o = v(cx as f64, cy as f64);
+        vec![o + v(-h * c, -h * s), o + v(h * c, h * s)]
+    })
+}
+
+/// Walls and polygons mixed, none reaching the cell.
+fn mixed() -> impl Strategy<Value = Vec<Vec<DVec2>>> {
+    prop::collection::vec(prop_oneof![wall(), wall(), blocker()], 1..16).prop_map(|bs| {
+        bs.into_iter()
+            .filter(|b| b.iter().all(|p| p.y > 11.0))
+            .collect()
+    })
+}
+
+/// Exact closed segment test on integer coordinates in i128, apart from everything else.
+fn int_segments_meet(a: [i64; 2], b: [i64; 2], c: [i64; 2], d: [i64; 2]) -> bool {
+    let o = |p: [i64; 2], q: [i64; 2], r: [i64; 2]| {
+        let v = (q[0] - p[0]) as i128 * (r[1] - p[1]) as i128
+            - (q[1] - p[1]) as i128 * (r[0] - p[0]) as i128;
+        v.signum()
+    };
+    let on = |p: [i64; 2], q: [i64; 2], r: [i64; 2]| {
+        o(p, q, r) == 0
+            && r[0] >= p[0].min(q[0])
+            && r[0] <= p[0].max(q[0])
+            && r[1] >= p[1].min(q[1])
+            && r[1] <= p[1].max(q[1])
+    };
+    (o(a, b, c) * o(a, b, d) < 0 && o(c, d, a) * o(c, d, b) < 0)
+        || on(a, b, c)
+        || on(a, b, d)
+        || on(c, d, a)
+        || on(c, d, b)
+}
+
+proptest! {
+    #![proptest_config(Config { cases: 64, rng_seed: RngSeed::Fixed(0x5eed_0012), failure_persistence: None, ..Config::default() })]
+
+    #[test]
+    fn verifier_with_walls_agrees_with_brute_force(blockers in mixed(), (a, b) in segment()) {
+        let cell = rect(0.0, 0.0, 10.0, 10.0);
+        let ver = Verifier::new(&cell, blockers.iter().map(|b| b.as_slice()));
+        let parts = ver.hidden_parts(a, b);
+        assert_sound(&cell, &blockers, &parts);
+        prop_assert_eq!(ver.is_hidden(a, b), parts.len() == 1 && parts[0].p0 == a && parts[0].p1 == b);
+        // Tightness, as for polygons.
+        let len = a.distance(b);
+        let mut missed = 0.0;
+        for q in dyadic_points(a, b, 7) {
+            let t = if len > 0.0 { a.distance(q) / len } else { 0.0 };
+            let inside = parts.iter().any(|h| t >= h.t0 && t <= h.t1);
+            if !inside && brute_hidden(&cell, &blockers, q, 400) {
+                let near = parts.iter().any(|h| (t - h.t0).abs() * len < 0.5 || (t - h.t1).abs() * len < 0.5);
+                if !near {
+                    missed += len / 128.0;
+                }
+            }
+        }
+        prop_assert!(missed <= 0.02 * len + 1.0, "verifier missed {missed} m of {len} m");
+    }
+
+    #[test]
+    fn adding_a_wall_never_shrinks_the_hidden_part(blockers in mixed(), extra in wall(), (a, b) in segment()) {
+        let cell = rect(0.0, 0.0, 10.0, 10.0);
+        let mut blockers = blockers;
+        let before = Verifier::new(&cell, blockers.iter().map(|b| b.as_slice())).hidden_parts(a, b);
+        if extra.iter().all(|p| p.y > 11.0) {
+            blockers.push(extra);
+        }
+        let after = Verifier::new(&cell, blockers.iter().map(|b| b.as_slice())).hidden_parts(a, b);
+        for h in &before {
+            prop_assert!(
+                after.iter().any(|g| g.t0 <= h.t0 && g.t1 >= h.t1),
+                "hidden part {h:?} lost after adding a wall: {after:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn segment_predicates_agree_with_integer_arithmetic(
+        pts in prop::collection::vec((-6i64..7, -6i64..7), 5),
+    ) {
+        use vocc::geom::predicates::{point_in_convex, segment_meets_convex, Containment};
+        let p: Vec<[i64; 2]> = pts.iter().map(|&(x, y)| [x, y]).collect();
+        let f = |q: [i64; 2]| v(q[0] as f64, q[1] as f64);
+        prop_assume!(p[2] != p[3]);
+        let wall = [f(p[2]), f(p[3])];
+        prop_assert_eq!(
+            segment_meets_convex(f(p[0]), f(p[1]), &wall),
+            int_segments_meet(p[0], p[1], p[2], p[3])
+        );
+        let on = int_segments_meet(p[4], p[4], p[2], p[3]);
+        let c = point_in_convex(&wall, f(p[4]));
+        prop_assert_eq!(c == Containment::Boundary, on);
+        prop_assert!(c != Containment::Inside);
+    }
+}

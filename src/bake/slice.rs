@@ -18,13 +18,16 @@
 
 use glam::DVec2;
 
+use crate::geom::predicates::{point_in_convex, Containment};
+
 /// Added to rule 2's height bound before comparing, metres: covers float rounding in it.
 pub const RULE2_SLACK_M: f64 = 1e-6;
 /// Relative rounding allowance of a computed distance.
 const DIST_ROUND: f64 = 1e-12;
 
-/// The greatest distance between a point of convex polygon `p` and one of convex polygon `q`,
-/// rounded up. (Distance is convex, so the maximum is at a pair of vertices.)
+/// The greatest distance between a point of convex polygon (or segment) `p` and one of convex
+/// polygon (or segment) `q`, rounded up. (Distance is convex, so the maximum is at a pair of
+/// vertices; a segment's are its two ends.)
 pub fn d_far(p: &[DVec2], q: &[DVec2]) -> f64 {
     let mut m: f64 = 0.0;
     for a in p {
@@ -67,8 +70,14 @@ pub fn d_near(cell: &[DVec2], q: &[DVec2]) -> f64 {
             m = m.min(point_segment_distance(v, a, b));
         }
     }
-    // Segments that cross have no vertex–edge pair at distance 0; callers only pass sets whose
-    // interiors are disjoint, and a crossing would make rule 2 fail anyway, but stay safe.
+    // Segments that cross have no vertex–edge pair at distance 0, and a set inside the other
+    // has its vertex–edge distances to the far boundary; callers only pass sets whose interiors
+    // are disjoint, and a crossing would make rule 2 fail anyway, but stay safe (exactly).
+    let inside =
+        |p: &[DVec2], v: DVec2| p.len() >= 2 && point_in_convex(p, v) != Containment::Outside;
+    if q.iter().any(|&v| inside(cell, v)) || cell.iter().any(|&v| inside(q, v)) {
+        return 0.0;
+    }
     for (a, b) in edges(q) {
         for (c, d) in edges(cell) {
             if segments_may_cross(a, b, c, d) {
@@ -198,6 +207,35 @@ mod tests {
         assert!(far >= (900.0f64 + 100.0).sqrt() && far < (1000.0f64).sqrt() + 1e-9);
         let seg = [DVec2::new(5.0, 30.0), DVec2::new(50.0, 30.0)];
         assert!((d_near(&cell, &seg) - 20.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn support_of_a_segment_blocker() {
+        let cell = sq(0.0, 0.0, 10.0);
+        let wall = [DVec2::new(-5.0, 30.0), DVec2::new(25.0, 40.0)];
+        let s = Support::new(&cell, &wall, 0.0, 12.0);
+        // Nearest: cell corner (0,10) to the wall's end (-5,30) (the foot of the perpendicular
+        // on the wall's line falls just outside the wall).
+        let near = 425.0f64.sqrt();
+        assert!(s.d_near <= near && s.d_near > near - 1e-9, "{s:?}");
+        // Farthest: cell corner (0,0) to the wall's end (25,40).
+        let far = (25.0f64 * 25.0 + 40.0 * 40.0).sqrt();
+        assert!(s.d_far >= far && s.d_far < far + 1e-9, "{s:?}");
+        assert_eq!((s.base, s.top), (0.0, 12.0));
+        // A wall through the cell, one inside it, one touching it: 0.
+        for w in [
+            [DVec2::new(-5.0, 5.0), DVec2::new(15.0, 6.0)],
+            [DVec2::new(2.0, 2.0), DVec2::new(3.0, 8.0)],
+            [DVec2::new(10.0, 5.0), DVec2::new(20.0, 5.0)],
+            [DVec2::new(12.0, 5.0), DVec2::new(10.0, 5.0)],
+        ] {
+            assert_eq!(d_near(&cell, &w), 0.0, "{w:?}");
+        }
+        // Edge-on, on the line of a cell edge past its corner.
+        let w = [DVec2::new(10.0, 13.0), DVec2::new(10.0, 20.0)];
+        assert!((d_near(&cell, &w) - 3.0).abs() < 1e-9);
+        // A polygon holding the whole cell: 0 (no vertex-edge pair says so).
+        assert_eq!(d_near(&cell, &sq(-10.0, -10.0, 40.0)), 0.0);
     }
 
     #[test]

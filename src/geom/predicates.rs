@@ -5,6 +5,18 @@
 //! through the `robust` crate); no epsilon appears here. Constructed points (intersections,
 //! snapped coordinates) are not handled here: callers shrink them conservatively and re-check
 //! them with these predicates.
+//!
+//! ## Convex pieces, segments included
+//! A *convex piece* is either a strictly convex counter-clockwise polygon (3 or more vertices,
+//! non-zero area) or a *segment*: exactly 2 distinct vertices, the closed segment between them
+//! (a wall seen from above, DESIGN.md section 4c). A segment is a degenerate convex set with an
+//! empty interior: every point of it is a boundary point. Every predicate below that takes a
+//! "convex polygon" accepts both kinds and answers exactly for the closed set: for a segment,
+//! [`point_in_convex`] is `Boundary` on it and `Outside` off it (a point on its line beyond its
+//! ends is outside), [`segment_meets_convex`] is closed segment against closed segment,
+//! [`tangent_vertices`] gives its two ends in angular order (one end twice when seen edge-on),
+//! [`convex_interiors_disjoint`] is weak separation, and [`common_tangents`] counts a segment
+//! lying on a line as lying on both of its closed sides.
 
 use glam::DVec2;
 
@@ -49,8 +61,16 @@ pub enum Containment {
 }
 
 /// Exact test of `p` against a convex polygon given counter-clockwise (collinear vertices
-/// allowed, at least 3 vertices, non-zero area).
+/// allowed, at least 3 vertices, non-zero area), or a segment (2 vertices: `Boundary` on the
+/// closed segment, `Outside` elsewhere; it has no interior).
 pub fn point_in_convex(poly: &[DVec2], p: DVec2) -> Containment {
+    if poly.len() == 2 {
+        return if on_segment(poly[0], poly[1], p) {
+            Containment::Boundary
+        } else {
+            Containment::Outside
+        };
+    }
     let mut on_edge = false;
     for (i, &a) in poly.iter().enumerate() {
         let b = poly[(i + 1) % poly.len()];
@@ -159,8 +179,12 @@ pub fn ring_orientation(ring: &[DVec2]) -> Orientation {
     }
 }
 
-/// True when two convex polygons (counter-clockwise, non-degenerate) have disjoint interiors,
-/// decided exactly by looking for a separating edge line of either polygon.
+/// True when a line has the convex piece `p` on one closed side and `q` on the other, decided
+/// exactly by looking among the edge lines of either (which suffices for convex polygons, the
+/// separating axis theorem; a segment's edge line is its own line). For two polygons of non-zero
+/// area this says their interiors are disjoint. A segment is separated from a polygon exactly
+/// when it misses the polygon's interior (touching its boundary is allowed), and from another
+/// segment unless the two cross at a point interior to both.
 pub fn convex_interiors_disjoint(p: &[DVec2], q: &[DVec2]) -> bool {
     fn separates(p: &[DVec2], q: &[DVec2]) -> bool {
         (0..p.len()).any(|i| {
@@ -177,6 +201,15 @@ pub fn is_strictly_convex_ccw(poly: &[DVec2]) -> bool {
     n >= 3
         && (0..n).all(|i| orient(poly[i], poly[(i + 1) % n], poly[(i + 2) % n]) == Orientation::Ccw)
         && winding_turns_once(poly)
+}
+
+/// True when `poly` is a convex piece (module header): strictly convex and counter-clockwise, or
+/// a segment of two distinct finite points.
+pub fn is_convex_piece(poly: &[DVec2]) -> bool {
+    match poly.len() {
+        2 => poly[0] != poly[1] && poly.iter().all(|p| p.is_finite()),
+        _ => is_strictly_convex_ccw(poly),
+    }
 }
 
 /// A polygon whose every corner turns left is convex only if it turns around once; a star
@@ -197,8 +230,8 @@ fn winding_turns_once(poly: &[DVec2]) -> bool {
     crossings == 1
 }
 
-/// Exact test: does the closed segment `[a, b]` meet the closed convex polygon `poly`
-/// (counter-clockwise, non-degenerate)?
+/// Exact test: does the closed segment `[a, b]` meet the closed convex piece `poly`
+/// (counter-clockwise and non-degenerate, or a segment)?
 pub fn segment_meets_convex(a: DVec2, b: DVec2, poly: &[DVec2]) -> bool {
     if point_in_convex(poly, a) != Containment::Outside
         || point_in_convex(poly, b) != Containment::Outside
@@ -215,7 +248,8 @@ pub fn segment_meets_convex(a: DVec2, b: DVec2, poly: &[DVec2]) -> bool {
 /// vertex `v` satisfying `orient(q, l, v) != Cw` and `orient(q, v, r) != Cw`, so the polygon is
 /// seen within the counter-clockwise angle from the direction of `poly[l]` to that of `poly[r]`
 /// (less than a half-turn). `None` when `q` is inside the polygon or on its boundary.
-/// Among vertices in the same direction, the nearest to `q` is returned.
+/// Among vertices in the same direction, the nearest to `q` is returned; so a segment seen
+/// edge-on (from a point of its line beyond an end) gives its nearer end twice.
 pub fn tangent_vertices(q: DVec2, poly: &[DVec2]) -> Option<(usize, usize)> {
     if point_in_convex(poly, q) != Containment::Outside {
         return None;
@@ -262,9 +296,24 @@ pub fn set_side(a: DVec2, b: DVec2, pts: &[DVec2]) -> SetSide {
     match (left, right) {
         (true, true) => SetSide::Both,
         (false, true) => SetSide::Right,
-        // All on the line counts as left; callers pass polygons of non-zero area.
+        // All on the line counts as left (only a segment can be): a caller asking for `Right`
+        // then gets no, which drops a candidate line and never admits a wrong one.
         _ => SetSide::Left,
     }
+}
+
+/// Whether every point of `pts` lies left of or on the directed line `a -> b`, and whether every
+/// point lies right of or on it (both for points all on the line).
+fn closed_sides(a: DVec2, b: DVec2, pts: &[DVec2]) -> (bool, bool) {
+    let (mut left, mut right) = (true, true);
+    for &p in pts {
+        match orient(a, b, p) {
+            Orientation::Ccw => right = false,
+            Orientation::Cw => left = false,
+            Orientation::Collinear => {}
+        }
+    }
+    (left, right)
 }
 
 /// A common tangent of two convex polygons `p` and `q`: the directed line from vertex `p[i]` to
@@ -284,7 +333,8 @@ pub struct Tangent {
 ///
 /// Found by exact orientation tests over all vertex pairs; a tangent through collinear vertices
 /// takes the pair nearest each other. `None` for a tangent that does not exist (overlapping
-/// polygons have no crossing tangents).
+/// polygons have no crossing tangents). A segment that lies on the line counts as lying on both
+/// of its closed sides, so that line may serve as an outer and as a crossing tangent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct CommonTangents {
     pub outer_left: Option<Tangent>,
@@ -314,14 +364,19 @@ pub fn common_tangents(p: &[DVec2], q: &[DVec2]) -> CommonTangents {
                 continue;
             }
             let t = Tangent { i, j };
-            let sp = set_side(p[i], q[j], p);
-            let sq = set_side(p[i], q[j], q);
-            match (sp, sq) {
-                (SetSide::Right, SetSide::Right) => keep(&mut out.outer_left, t),
-                (SetSide::Left, SetSide::Left) => keep(&mut out.outer_right, t),
-                (SetSide::Left, SetSide::Right) => keep(&mut out.cross_left, t),
-                (SetSide::Right, SetSide::Left) => keep(&mut out.cross_right, t),
-                _ => {}
+            let (pl, pr) = closed_sides(p[i], q[j], p);
+            let (ql, qr) = closed_sides(p[i], q[j], q);
+            if pr && qr {
+                keep(&mut out.outer_left, t);
+            }
+            if pl && ql {
+                keep(&mut out.outer_right, t);
+            }
+            if pl && qr {
+                keep(&mut out.cross_left, t);
+            }
+            if pr && ql {
+                keep(&mut out.cross_right, t);
             }
         }
     }
@@ -484,6 +539,149 @@ mod tests {
         // Overlapping polygons have no crossing tangent.
         let o = [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)];
         let t = common_tangents(&c, &o);
+        assert!(t.cross_left.is_none() && t.cross_right.is_none());
+    }
+    #[test]
+    fn point_in_segment_is_boundary_on_it_and_outside_beyond_its_ends() {
+        let seg = [v(0.0, 0.0), v(4.0, 2.0)];
+        assert_eq!(point_in_convex(&seg, v(2.0, 1.0)), Containment::Boundary);
+        assert_eq!(point_in_convex(&seg, v(0.0, 0.0)), Containment::Boundary);
+        assert_eq!(point_in_convex(&seg, v(4.0, 2.0)), Containment::Boundary);
+        // On its line but beyond an end: outside (every edge test alone says collinear).
+        assert_eq!(point_in_convex(&seg, v(6.0, 3.0)), Containment::Outside);
+        assert_eq!(point_in_convex(&seg, v(-2.0, -1.0)), Containment::Outside);
+        assert_eq!(
+            point_in_convex(&seg, v(2.0, 1.0000001)),
+            Containment::Outside
+        );
+        assert!(is_convex_piece(&seg));
+        assert!(!is_convex_piece(&[v(1.0, 1.0), v(1.0, 1.0)]));
+        assert!(!is_convex_piece(&[v(1.0, 1.0), v(f64::NAN, 1.0)]));
+        assert!(!is_strictly_convex_ccw(&seg));
+    }
+
+    #[test]
+    fn segment_meets_segment_blocker() {
+        let wall = [v(0.0, 0.0), v(4.0, 0.0)];
+        assert!(
+            segment_meets_convex(v(1.0, -1.0), v(1.0, 1.0), &wall),
+            "crossing"
+        );
+        assert!(segment_meets_convex(v(1.0, 0.0), v(1.0, 1.0), &wall), "T");
+        assert!(
+            segment_meets_convex(v(4.0, 0.0), v(5.0, 1.0), &wall),
+            "shared end"
+        );
+        assert!(
+            segment_meets_convex(v(3.0, 0.0), v(6.0, 0.0), &wall),
+            "overlap"
+        );
+        assert!(
+            !segment_meets_convex(v(5.0, 0.0), v(6.0, 0.0), &wall),
+            "collinear apart"
+        );
+        assert!(
+            !segment_meets_convex(v(0.0, 1.0), v(4.0, 1.0), &wall),
+            "parallel"
+        );
+        assert!(
+            !segment_meets_convex(v(4.5, -1.0), v(4.5, 1.0), &wall),
+            "past the end"
+        );
+    }
+
+    #[test]
+    fn tangent_vertices_of_a_segment() {
+        let seg = [v(0.0, 10.0), v(4.0, 10.0)];
+        // Seen from below: counter-clockwise from (4,10) to (0,10).
+        assert_eq!(tangent_vertices(v(2.0, 0.0), &seg), Some((1, 0)));
+        // From above, the other way round.
+        assert_eq!(tangent_vertices(v(2.0, 20.0), &seg), Some((0, 1)));
+        // Edge-on: the nearer end, twice.
+        assert_eq!(tangent_vertices(v(-3.0, 10.0), &seg), Some((0, 0)));
+        assert_eq!(tangent_vertices(v(9.0, 10.0), &seg), Some((1, 1)));
+        // On it: none.
+        assert_eq!(tangent_vertices(v(1.0, 10.0), &seg), None);
+        assert_eq!(tangent_vertices(v(4.0, 10.0), &seg), None);
+    }
+
+    #[test]
+    fn separation_of_segments() {
+        let sq = [v(0.0, 0.0), v(2.0, 0.0), v(2.0, 2.0), v(0.0, 2.0)];
+        let s = |a: DVec2, b: DVec2| [a, b];
+        // Through the square, inside it, and poking in: not separated.
+        assert!(!convex_interiors_disjoint(
+            &s(v(-1.0, 1.0), v(3.0, 1.0)),
+            &sq
+        ));
+        assert!(!convex_interiors_disjoint(
+            &s(v(0.5, 0.5), v(1.5, 1.5)),
+            &sq
+        ));
+        assert!(!convex_interiors_disjoint(
+            &sq,
+            &s(v(1.0, 1.0), v(1.0, 5.0))
+        ));
+        // Along an edge, touching a corner, apart: separated.
+        assert!(convex_interiors_disjoint(&s(v(0.0, 2.0), v(2.0, 2.0)), &sq));
+        assert!(convex_interiors_disjoint(&s(v(2.0, 2.0), v(3.0, 5.0)), &sq));
+        assert!(convex_interiors_disjoint(&s(v(3.0, 0.0), v(3.0, 2.0)), &sq));
+        // On the line of an edge, but past it on a diagonal: the square's edge x = 2 separates.
+        assert!(convex_interiors_disjoint(&s(v(2.5, 0.5), v(3.0, 3.0)), &sq));
+        // Two segments: crossing is not separated; T, shared end, collinear overlap are.
+        let w = s(v(0.0, 0.0), v(4.0, 0.0));
+        assert!(!convex_interiors_disjoint(
+            &w,
+            &s(v(1.0, -1.0), v(1.0, 1.0))
+        ));
+        assert!(convex_interiors_disjoint(&w, &s(v(1.0, 0.0), v(1.0, 1.0))));
+        assert!(convex_interiors_disjoint(&w, &s(v(4.0, 0.0), v(5.0, 3.0))));
+        assert!(convex_interiors_disjoint(&w, &s(v(2.0, 0.0), v(6.0, 0.0))));
+    }
+
+    /// Checks a tangent's defining sides by brute force over every vertex.
+    fn sides_hold(p: &[DVec2], q: &[DVec2], t: Tangent, p_left: bool, q_left: bool) -> bool {
+        let (a, b) = (p[t.i], q[t.j]);
+        let ok = |pts: &[DVec2], left: bool| {
+            pts.iter().all(|&x| {
+                let o = orient(a, b, x);
+                o == Orientation::Collinear || (o == Orientation::Ccw) == left
+            })
+        };
+        ok(p, p_left) && ok(q, q_left)
+    }
+
+    #[test]
+    fn common_tangents_of_cell_and_segment() {
+        let c = [v(-0.5, -0.5), v(0.5, -0.5), v(0.5, 0.5), v(-0.5, 0.5)];
+        let walls = [
+            [v(-2.0, 10.0), v(3.0, 11.0)],
+            [v(3.0, 11.0), v(-2.0, 10.0)],
+            // Along the line through two cell corners (edge-on, its own line is a tangent).
+            [v(-0.5, 3.0), v(-0.5, 8.0)],
+            // Radial, seen end-on from the cell centre.
+            [v(0.0, 5.0), v(0.0, 9.0)],
+        ];
+        for w in &walls {
+            let t = common_tangents(&c, w);
+            let ol = t.outer_left.unwrap();
+            let or = t.outer_right.unwrap();
+            let cl = t.cross_left.unwrap();
+            let cr = t.cross_right.unwrap();
+            assert!(sides_hold(&c, w, ol, false, false), "{w:?}");
+            assert!(sides_hold(&c, w, or, true, true), "{w:?}");
+            assert!(sides_hold(&c, w, cl, true, false), "{w:?}");
+            assert!(sides_hold(&c, w, cr, false, true), "{w:?}");
+        }
+        // The edge-on wall's own line (x = -0.5, the cell on its right) is both its left outer
+        // and its right crossing tangent.
+        let t = common_tangents(&c, &walls[2]);
+        let ol = t.outer_left.unwrap();
+        assert_eq!((c[ol.i], walls[2][ol.j]), (v(-0.5, 0.5), v(-0.5, 3.0)));
+        let cr = t.cross_right.unwrap();
+        assert_eq!((c[cr.i], walls[2][cr.j]), (v(-0.5, 0.5), v(-0.5, 3.0)));
+        // A wall crossing the cell has no crossing tangent.
+        let t = common_tangents(&c, &[v(-2.0, 0.0), v(2.0, 0.1)]);
         assert!(t.cross_left.is_none() && t.cross_right.is_none());
     }
 }

@@ -1,8 +1,9 @@
 //! The exact hidden-interval verifier (DESIGN.md section 6.1): the final gate for every virtual
 //! occluder.
 //!
-//! Input: a convex cell `C` (counter-clockwise), convex blockers (counter-clockwise), and a
-//! segment `s = [a, b]` with f64 endpoints. Output: the sub-intervals of `s` hidden from every
+//! Input: a convex cell `C` (counter-clockwise), convex blockers (counter-clockwise polygons, or
+//! segments: 2-vertex blockers, walls seen from above), and a segment `s = [a, b]` with f64
+//! endpoints. Output: the sub-intervals of `s` hidden from every
 //! point of `C`: every closed 2D segment from a point of `C` to a point of such an interval meets
 //! some blocker (touching counts).
 //!
@@ -34,6 +35,17 @@
 //! `B_k`'s side of `L_k` and `c` on the other closed side, so the ray crosses `L_k` once, at or
 //! before `c`, and `x` (on `B_k`'s closed side) comes no later. So `[q, c]` contains `x`. ∎
 //!
+//! **Segments.** A 2-vertex blocker (a wall) is the closed segment between its vertices: convex,
+//! closed, with an empty interior. Lemma 1 uses of `B_k` only that it is convex and closed, that
+//! its chord lies in it, and that it lies on one closed side of `L_k`; all hold for a segment,
+//! whose only chord is itself (its two ends, in the order `q` sees them) and whose separating
+//! lines may be its own line (the segment lies on it, which is on its closed side). Seen edge-on
+//! from `q` its two ends are collinear with `q`, (A) fails, and it is simply not a link there.
+//! The predicates answer exactly for segments ([`super::predicates`], module header); in
+//! particular a point of the segment's line beyond its ends is outside it, so the search's
+//! "both ends in one blocker" shortcut below holds for segments too (the piece then lies on
+//! the wall, and a segment from `C` to any point of it meets the wall there).
+//!
 //! **Lemma 2.** Each condition is `f(q) > 0` or `f(q) >= 0` for an affine `f` (the orientation
 //! determinant is affine in `q`), so a certificate that holds at both ends of a segment holds at
 //! every point of it. ∎
@@ -52,8 +64,8 @@
 use glam::DVec2;
 
 use super::predicates::{
-    common_tangents, convex_interiors_disjoint, orient, point_in_convex, set_side,
-    tangent_vertices, Containment, Orientation, SetSide,
+    common_tangents, convex_interiors_disjoint, orient, point_in_convex, segment_meets_convex,
+    set_side, tangent_vertices, Containment, Orientation, SetSide,
 };
 
 /// Pieces shorter than this are not split further; an uncertified one counts as visible, metres.
@@ -105,7 +117,8 @@ pub struct Verifier<'a> {
 }
 
 impl<'a> Verifier<'a> {
-    /// `cell` and every blocker: convex, counter-clockwise, non-degenerate.
+    /// `cell`: convex, counter-clockwise, non-degenerate. Every blocker: the same, or a segment
+    /// (exactly 2 distinct vertices).
     pub fn new(cell: &'a [DVec2], blockers: impl IntoIterator<Item = &'a [DVec2]>) -> Self {
         let blockers: Vec<&[DVec2]> = blockers.into_iter().collect();
         let boxes = blockers.iter().map(|b| bbox(b)).collect();
@@ -129,13 +142,17 @@ impl<'a> Verifier<'a> {
             .filter(|(_, (bl, bh))| bl.x <= hi.x && bh.x >= lo.x && bl.y <= hi.y && bh.y >= lo.y)
             .map(|(b, _)| *b)
             .collect();
-        // Every segment from the cell to [a, b] lies in their convex hull; a blocker whose
+        // Every segment from the cell to [a, b] lies in their convex hull; a polygon whose
         // interior misses the hull can at most touch such segments on its boundary. Leaving it
-        // out can only certify less, never more.
+        // out can only certify less, never more. A wall segment is kept when it meets the closed
+        // hull: one lying on the hull's boundary may hold part of [a, b] (a VO along a facade).
         let hull = convex_hull(self.cell.iter().copied().chain([a, b]));
         if hull.len() >= 3 {
             near.into_iter()
-                .filter(|b| !convex_interiors_disjoint(&hull, b))
+                .filter(|b| match b.len() {
+                    2 => segment_meets_convex(b[0], b[1], &hull),
+                    _ => !convex_interiors_disjoint(&hull, b),
+                })
                 .collect()
         } else {
             near

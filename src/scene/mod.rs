@@ -198,12 +198,15 @@ pub struct Object {
     pub shape: Shape,
 }
 
-/// A 2.5D blocker: a convex footprint piece standing from `base` to `top`, certainly solid.
+/// A 2.5D blocker: a convex footprint piece standing from `base` to `top`, certainly solid; or
+/// a wall segment (2 vertices): the vertical rectangle over it from `base` to `top` is certainly
+/// part of the object's surface, so every ray crossing it is blocked.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Blocker {
     /// The object it comes from.
     pub object: u32,
-    /// Strictly convex, counter-clockwise, local coordinates.
+    /// Strictly convex, counter-clockwise, local coordinates; or exactly 2 distinct points (a
+    /// wall), [`crate::geom::predicates::is_convex_piece`].
     pub polygon: Vec<DVec2>,
     pub base: f64,
     pub top: f64,

@@ -32,9 +32,44 @@ pub fn temp_dir(name: &str) -> PathBuf {
 }
 
 use glam::DVec2;
-use vocc::geom::predicates::{point_in_convex, segment_meets_convex, Containment};
+use vocc::geom::predicates::{
+    orient, point_in_convex, segment_meets_convex, Containment, Orientation,
+};
 
-/// Brute-force oracle, independent of the verifier: is `q` hidden from the convex `cell`? Casts
+/// Closed segments `[a, b]` and `[c, d]` share a point: written here from orientation signs
+/// alone, apart from the predicates module's segment code (which the verifier uses).
+pub fn segments_meet(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let s = |p: DVec2, q: DVec2, r: DVec2| match orient(p, q, r) {
+        Orientation::Ccw => 1,
+        Orientation::Cw => -1,
+        Orientation::Collinear => 0,
+    };
+    let (d1, d2, d3, d4) = (s(a, b, c), s(a, b, d), s(c, d, a), s(c, d, b));
+    if d1 * d2 < 0 && d3 * d4 < 0 {
+        return true;
+    }
+    // Collinear triples: the point lies within the other segment's box.
+    let within = |p: DVec2, q: DVec2, r: DVec2| {
+        r.x >= p.x.min(q.x) && r.x <= p.x.max(q.x) && r.y >= p.y.min(q.y) && r.y <= p.y.max(q.y)
+    };
+    (d1 == 0 && within(a, b, c))
+        || (d2 == 0 && within(a, b, d))
+        || (d3 == 0 && within(c, d, a))
+        || (d4 == 0 && within(c, d, b))
+}
+
+/// Does the closed segment `[q, c]` meet blocker `b`? A 2-vertex blocker is a wall segment,
+/// tested with [`segments_meet`]; a polygon with the predicates' convex test.
+pub fn meets_blocker(q: DVec2, c: DVec2, b: &[DVec2]) -> bool {
+    if b.len() == 2 {
+        segments_meet(q, c, b[0], b[1])
+    } else {
+        segment_meets_convex(q, c, b)
+    }
+}
+
+/// Brute-force oracle, independent of the verifier: is `q` hidden from the convex `cell` by the
+/// blockers (convex polygons, or 2-vertex wall segments)? Casts
 /// exact segments from `q` to `n` points just inside the cell's boundary and to points near each
 /// vertex; `q` is visible if any of them misses every blocker. (If `q` sees any point of the
 /// cell it sees a boundary point, so boundary sampling suffices up to its density.)
@@ -64,7 +99,7 @@ pub fn brute_hidden(cell: &[DVec2], blockers: &[Vec<DVec2>], q: DVec2, n: usize)
         // Pull the target a hair inside so it surely belongs to the cell.
         let c = centre + (t - centre) * (1.0 - 1e-9);
         debug_assert!(point_in_convex(cell, c) != Containment::Outside);
-        blockers.iter().any(|b| segment_meets_convex(q, c, b))
+        blockers.iter().any(|b| meets_blocker(q, c, b))
     })
 }
 
