@@ -434,3 +434,150 @@ fn four_shards_in_four_processes_merge_into_the_single_bake() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("another frame"));
 }
+
+/// A GeoJSON of square buildings (world coordinates): `(x, y, side, height)` each, attribute
+/// `height`.
+fn boxes_geojson(b: &[(f64, f64, f64, f64)]) -> String {
+    let feats: Vec<String> = b
+        .iter()
+        .map(|&(x, y, s, h)| {
+            format!(
+                r#"{{"type":"Feature","properties":{{"height":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]]}}}}"#,
+                x + s,
+                x + s,
+                y + s,
+                y + s
+            )
+        })
+        .collect();
+    format!(
+        r#"{{"type":"FeatureCollection","features":[{}]}}"#,
+        feats.join(",")
+    )
+}
+
+/// A block of `n` x `n` buildings of 20 m, 30 m apart, 25 m tall, from world (x0, y0).
+fn block(x0: f64, y0: f64, n: usize) -> Vec<(f64, f64, f64, f64)> {
+    (0..n * n)
+        .map(|k| {
+            (
+                x0 + 30.0 * (k % n) as f64,
+                y0 + 30.0 * (k / n) as f64,
+                20.0,
+                25.0,
+            )
+        })
+        .collect()
+}
+
+/// Runs vocc under `ulimit -v 4000000` (4 GB of address space), as the issue asks.
+fn vocc_limited(args: &[&str]) -> (std::process::Output, std::time::Duration) {
+    let t = std::time::Instant::now();
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(r#"ulimit -v 4000000 && exec "$0" "$@""#)
+        .arg(env!("CARGO_BIN_EXE_vocc"))
+        .args(args)
+        .current_dir(repo(""))
+        .output()
+        .expect("sh runs");
+    (out, t.elapsed())
+}
+
+/// Issue 13, defect 2: grids that cannot fit aborted with a backtrace (rc 134) after asking for
+/// 13-36 GB. Each way in is refused before allocating, in under a second, with exit status 1, no
+/// backtrace, and a message naming the cause.
+#[test]
+fn grids_that_cannot_fit_are_refused_naming_the_cause_not_aborted_with_a_backtrace() {
+    let dir = common::temp_dir("cli-grid-too-large");
+    let write = |name: &str, b: &[(f64, f64, f64, f64)]| {
+        let p = dir.join(name);
+        std::fs::write(&p, boxes_geojson(b)).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let out = dir.join("x.vocc");
+    let o = out.to_str().unwrap();
+    // Two scenes in different coordinate systems: Lambert-93 (Lyon) and RD New (Den Haag).
+    let lyon = write("lyon_l93.geojson", &block(1_842_000.0, 5_176_000.0, 3));
+    let haag = write("denhaag_rd.geojson", &block(78_500.0, 457_900.0, 3));
+    // One building 10^6 m away from the rest.
+    let mut b = block(1_842_000.0, 5_176_000.0, 3);
+    b.push((2_842_000.0, 6_176_000.0, 20.0, 25.0));
+    let outlier = write("outlier.geojson", &b);
+    // A scene too wide for its cell size: two buildings 300 km apart, 1 m cells.
+    let wide = write(
+        "wide.geojson",
+        &[(0.0, 0.0, 20.0, 25.0), (300_000.0, 300_000.0, 20.0, 25.0)],
+    );
+    for (args, want) in [
+        (
+            vec![lyon.as_str(), haag.as_str()],
+            vec![
+                "lyon_l93.geojson",
+                "denhaag_rd.geojson",
+                "do not meet",
+                "coordinate system",
+            ],
+        ),
+        (
+            vec![outlier.as_str()],
+            vec![
+                "object #9",
+                "feature 9",
+                "from the other objects",
+                "fix or remove it",
+            ],
+        ),
+        (
+            vec![wide.as_str(), "--cell-size", "1"],
+            vec!["the scene spans 300 km x 300 km", "use cells of"],
+        ),
+    ] {
+        let mut a = vec!["bake"];
+        a.extend(&args);
+        a.extend(["--height-attr", "height", "-o", o]);
+        let (res, took) = vocc_limited(&a);
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            !err.contains("panicked")
+                && !err.contains("backtrace")
+                && !err.contains("memory allocation"),
+            "{err}"
+        );
+        assert!(err.contains("the grid would have"), "{err}");
+        for w in want {
+            assert!(err.contains(w), "{args:?}: no {w:?} in {err}");
+        }
+        assert!(took.as_secs_f64() < 1.0, "{args:?}: refused after {took:?}");
+        assert!(!out.exists(), "no output after a refused bake");
+    }
+}
+
+/// Issue 13, defect 2 (third way in): `--cell-size 0.1` on 150 buildings ran for nearly two
+/// minutes, then aborted. Cells under 1 m are refused as a usage error (VO endpoints lie on a
+/// grid of 2 m at the default search distance, so they could only multiply the work).
+#[test]
+fn cell_size_0_1_on_150_buildings_is_refused_at_once_not_run_for_minutes() {
+    let dir = common::temp_dir("cli-cell-size-0-1");
+    let city = dir.join("city150.geojson");
+    let c = city.to_str().unwrap();
+    assert!(vocc(&["gen-city", "--buildings", "150", "-o", c])
+        .status
+        .success());
+    let o = dir.join("x.vocc");
+    let (res, took) = vocc_limited(&[
+        "bake",
+        c,
+        "--height-attr",
+        "height",
+        "--cell-size",
+        "0.1",
+        "-o",
+        o.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(2), "{err}");
+    assert!(err.contains("cell size of 1 to 100000 metres"), "{err}");
+    assert!(took.as_secs_f64() < 1.0, "refused after {took:?}");
+}

@@ -10,6 +10,7 @@
 //! one cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
 //! dequantized form; a VO that fails is shrunk or dropped and counted.
 
+pub mod budget;
 pub mod decimate;
 pub mod incremental;
 pub mod job;

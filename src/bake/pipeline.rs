@@ -44,6 +44,11 @@ pub const H0_M: f64 = 2.0;
 pub const H_RATIO: f64 = 1.25;
 /// Height levels tried for one VO before it is dropped: its own, then each lower one.
 pub const LEVEL_FALLBACKS: usize = 3;
+/// The smallest view cell, metres. VO endpoints lie on a grid of at least 2 m at the default
+/// search distance, so smaller cells give no finer occluders, only many more cells to bake.
+pub const MIN_CELL_SIZE_M: f64 = 1.0;
+/// The largest view cell, metres.
+pub const MAX_CELL_SIZE_M: f64 = 1e5;
 
 /// How many slices a cell gets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,7 +101,7 @@ impl Default for BakeParams {
 /// Why a bake cannot start.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum BakeError {
-    #[error("cell size must be a positive number of metres, got {0}")]
+    #[error("cell size must be {MIN_CELL_SIZE_M} to {MAX_CELL_SIZE_M} metres, got {0}")]
     CellSize(f64),
     #[error("eye heights must satisfy 0 <= low <= high, got {0}..{1}")]
     Eye(f64, f64),
@@ -108,6 +113,9 @@ pub enum BakeError {
     EmptyScene,
     #[error("the grid would have {0} cells, more than 2^31; use larger cells")]
     TooManyCells(u64),
+    /// The grid's per-cell tables would not fit in memory ([`super::budget`]).
+    #[error("{0}")]
+    Grid(Box<super::budget::GridTooLarge>),
 }
 
 /// What baking one cell took.
@@ -165,7 +173,7 @@ fn pow2_at_least(x: f64) -> f64 {
 impl<'s> Plan<'s> {
     pub fn new(scene: &'s Scene, params: BakeParams) -> Result<Plan<'s>, BakeError> {
         let size = params.cell_size;
-        if !(size.is_finite() && size > 0.0 && size <= 1e5) {
+        if !(size.is_finite() && (MIN_CELL_SIZE_M..=MAX_CELL_SIZE_M).contains(&size)) {
             return Err(BakeError::CellSize(size));
         }
         let (e0, e1) = params.eye;
@@ -188,6 +196,8 @@ impl<'s> Plan<'s> {
         let (min_x, min_y) = (ext.min.x.floor(), ext.min.y.floor());
         let nx = ((ext.max.x - min_x) / size).floor() as u64 + 1;
         let ny = ((ext.max.y - min_y) / size).floor() as u64 + 1;
+        // Before anything is allocated per cell: the grid's tables must fit in memory.
+        super::budget::check(scene, nx, ny, size).map_err(BakeError::Grid)?;
         if nx * ny > 1 << 31 {
             return Err(BakeError::TooManyCells(nx * ny));
         }

@@ -7,7 +7,8 @@
 
 use clap::Args;
 
-use vocc::bake::pipeline::Slices;
+use vocc::bake::pipeline::{Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
+use vocc::runtime::frame::MAX_VOS_PER_CELL;
 use vocc::scene::ReadOptions;
 
 /// Options of the scene readers.
@@ -23,7 +24,7 @@ pub struct ReadArgs {
     #[arg(long, value_name = "NAME")]
     pub levels_attr: Option<String>,
     /// Metres per storey for --levels-attr.
-    #[arg(long, default_value_t = 3.0, value_name = "M")]
+    #[arg(long, default_value_t = 3.0, value_name = "M", value_parser = parse_positive)]
     pub storey_height: f64,
     /// CityJSON: level of detail to read (default: the highest each object has).
     #[arg(long)]
@@ -91,4 +92,76 @@ pub fn parse_rect(s: &str) -> Result<[f64; 4], String> {
             "expected X0,Y0,X1,Y1 with X0 <= X1 and Y0 <= Y1, got {s:?}"
         )),
     }
+}
+
+/// Parses a finite number greater than 0.
+pub fn parse_positive(s: &str) -> Result<f64, String> {
+    let v = parse_num(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("expected a number greater than 0, got {s:?}"))
+    }
+}
+
+/// Parses a view cell size, metres ([`MIN_CELL_SIZE_M`] to [`MAX_CELL_SIZE_M`]).
+pub fn parse_cell_size(s: &str) -> Result<f64, String> {
+    let v = parse_num(s)?;
+    if (MIN_CELL_SIZE_M..=MAX_CELL_SIZE_M).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected a cell size of {MIN_CELL_SIZE_M} to {MAX_CELL_SIZE_M} metres, got {s:?}"
+        ))
+    }
+}
+
+/// Parses eye heights above the ground "LOW..HIGH" with 0 <= LOW <= HIGH.
+pub fn parse_eye(s: &str) -> Result<(f64, f64), String> {
+    let (lo, hi) = parse_range(s)?;
+    if 0.0 <= lo && lo <= hi {
+        Ok((lo, hi))
+    } else {
+        Err(format!(
+            "expected eye heights LOW..HIGH with 0 <= LOW <= HIGH, got {s:?}"
+        ))
+    }
+}
+
+/// Parses a whole number in `lo..=hi`.
+fn whole(s: &str, lo: u64, hi: u64) -> Result<u64, String> {
+    match s.trim().parse::<u64>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ if hi == u64::MAX => Err(format!(
+            "expected a whole number of at least {lo}, got {s:?}"
+        )),
+        _ => Err(format!(
+            "expected a whole number from {lo} to {hi}, got {s:?}"
+        )),
+    }
+}
+
+/// Parses a count of at least 1.
+pub fn parse_count(s: &str) -> Result<usize, String> {
+    whole(s, 1, usize::MAX as u64).map(|v| v as usize)
+}
+
+/// Parses a count of at least 1, as u32.
+pub fn parse_count_u32(s: &str) -> Result<u32, String> {
+    whole(s, 1, u32::MAX as u64).map(|v| v as u32)
+}
+
+/// Parses `--max-vos`: 1 to [`MAX_VOS_PER_CELL`].
+pub fn parse_max_vos(s: &str) -> Result<usize, String> {
+    whole(s, 1, MAX_VOS_PER_CELL as u64).map(|v| v as usize)
+}
+
+/// The most buildings `gen-city` writes: 10^7 take about 1.5 GB of memory and a 3 GB file.
+pub const MAX_GEN_BUILDINGS: u64 = 10_000_000;
+
+/// Parses `gen-city --buildings`: 1 to [`MAX_GEN_BUILDINGS`].
+pub fn parse_buildings(s: &str) -> Result<usize, String> {
+    whole(s, 1, MAX_GEN_BUILDINGS)
+        .map(|v| v as usize)
+        .map_err(|e| format!("{e} (10^7 buildings take about 1.5 GB of memory and a 3 GB file)"))
 }

@@ -15,7 +15,10 @@ use vocc::bake::job::{BakeJob, BakeSummary, JobError, Progress, ReuseRefusal};
 use vocc::bake::pipeline::{BakeParams, Slices};
 use vocc::scene;
 
-use crate::args::{parse_range, parse_rect, parse_slices, ReadArgs};
+use crate::args::{
+    parse_cell_size, parse_count, parse_count_u32, parse_eye, parse_max_vos, parse_rect,
+    parse_slices, ReadArgs,
+};
 use crate::files::{parse, read_store, write_atomically};
 
 #[derive(Args)]
@@ -29,19 +32,19 @@ pub struct BakeArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Side of the square view cells, metres.
-    #[arg(long, default_value_t = 100.0, value_name = "M")]
+    #[arg(long, default_value_t = 100.0, value_name = "M", value_parser = parse_cell_size)]
     pub cell_size: f64,
     /// Eye heights above the ground, metres: LOW..HIGH.
-    #[arg(long, default_value = "1.5..2.0", value_parser = parse_range, value_name = "LOW..HIGH")]
+    #[arg(long, default_value = "1.5..2.0", value_parser = parse_eye, value_name = "LOW..HIGH")]
     pub eye: (f64, f64),
     /// Slices per cell: `auto` (up to 5) or 1 to 5.
     #[arg(long, default_value = "auto", value_parser = parse_slices)]
     pub slices: Slices,
     /// Most VOs per cell (1 to 10).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = parse_max_vos)]
     pub max_vos: usize,
     /// Worker threads (default: all cores). The output does not depend on it.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_count, value_name = "N")]
     pub threads: Option<usize>,
     /// Bake only the cells meeting this world rectangle X0,Y0,X1,Y1 (the others stay empty).
     #[arg(long, value_parser = parse_rect, allow_hyphen_values = true, value_name = "X0,Y0,X1,Y1")]
@@ -54,7 +57,7 @@ pub struct BakeArgs {
     #[arg(long, value_name = "I/N|auto")]
     pub shard: Option<String>,
     /// The number of shards, for `--shard auto` under Kubernetes or AWS Batch.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_count_u32)]
     pub shard_count: Option<u32>,
     /// Bake only the cells meeting the polygons of this GeoJSON (the walkable area, world
     /// coordinates); the others stay empty.
@@ -127,9 +130,6 @@ pub fn run(a: BakeArgs) -> Result<()> {
         Some(spec) => Some(shard(spec, a.shard_count, &|k| std::env::var(k).ok())?),
         None => None,
     };
-    if let Some(n) = a.threads {
-        anyhow::ensure!(n >= 1, "--threads must be at least 1");
-    }
     let s = scene::load(&a.scene, &a.read.options())?;
     let load_s = t0.elapsed().as_secs_f64();
     let region = a.region.map(|[x0, y0, x1, y1]| {

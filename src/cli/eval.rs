@@ -20,17 +20,17 @@ use vocc::eval::truth::TruthParams;
 use vocc::runtime::culler::BoxTree;
 use vocc::scene::{self, ReadOptions};
 
-use crate::args::ReadArgs;
+use crate::args::{parse_count, ReadArgs};
 use crate::files::{parse, read_store, write_atomically};
 
 /// Ground-truth sampling options.
 #[derive(Args, Clone)]
 pub struct TruthArgs {
     /// Eye points per cell (spread over the cell, heights within the eye range).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = parse_count)]
     pub eyes: usize,
     /// Rays aimed at each object from each eye point, at points of its surface.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = parse_count)]
     pub samples: usize,
     /// Random seed (cells and rays).
     #[arg(long, default_value_t = 1)]
@@ -58,7 +58,7 @@ pub struct EvalArgs {
     #[command(flatten)]
     pub read: ReadArgs,
     /// Evaluate a seeded sample of N cells (default: every cell).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_count)]
     pub cells: Option<usize>,
     #[command(flatten)]
     pub truth: TruthArgs,
@@ -158,7 +158,7 @@ pub struct ResultsArgs {
     #[arg(short, long, default_value = "docs/RESULTS.md")]
     pub output: PathBuf,
     /// Cells sampled for the sweeps.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 40, value_parser = parse_count)]
     pub sample: usize,
     #[command(flatten)]
     pub truth: TruthArgs,

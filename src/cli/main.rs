@@ -12,7 +12,7 @@ use clap::{Parser, Subcommand};
 
 use vocc::scene;
 
-use args::{parse_xy, ReadArgs};
+use args::{parse_buildings, parse_cell_size, parse_num, parse_positive, parse_xy, ReadArgs};
 use files::write_atomically;
 
 mod args;
@@ -112,13 +112,13 @@ enum Command {
         at: Option<(f64, f64)>,
         /// --debug: side of the square cells, metres (grid anchored at the scene's minimum
         /// corner).
-        #[arg(long, default_value_t = 100.0, value_name = "M")]
+        #[arg(long, default_value_t = 100.0, value_name = "M", value_parser = parse_cell_size)]
         cell_size: f64,
         /// --debug: slice height in world metres (default: half the median building height).
-        #[arg(long, value_name = "Z")]
+        #[arg(long, value_name = "Z", value_parser = parse_num, allow_hyphen_values = true)]
         slice: Option<f64>,
         /// Store mode: metres shown around the cell's centre.
-        #[arg(long, default_value_t = 500.0, value_name = "M")]
+        #[arg(long, default_value_t = 500.0, value_name = "M", value_parser = parse_positive)]
         radius: f64,
         #[command(flatten)]
         read: ReadArgs,
@@ -143,7 +143,7 @@ enum Command {
     /// Write a deterministic procedural city (GeoJSON footprints, attribute `height`).
     GenCity {
         /// Number of buildings.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_buildings)]
         buildings: usize,
         /// Random seed.
         #[arg(long, default_value_t = 1)]

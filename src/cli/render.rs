@@ -29,10 +29,6 @@ pub fn render_debug(
     output: &Path,
 ) -> Result<()> {
     let at = at.context("--debug needs --at X,Y")?;
-    anyhow::ensure!(
-        cell_size.is_finite() && cell_size > 0.0,
-        "--cell-size must be a positive number of metres"
-    );
     let s = scene::load(scene_files, &read.options())?;
     let local = glam::DVec2::new(at.0 - s.origin.x, at.1 - s.origin.y);
     let z = match slice {
