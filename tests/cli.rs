@@ -255,7 +255,7 @@ fn bake_then_inspect_pvs_and_export() {
     ]);
     assert!(out.status.success());
     let frame =
-        vocc::runtime::decode_frame(&std::fs::read(blob.with_extension("frame")).unwrap()).unwrap();
+        vocc::runtime::decode_frame(&std::fs::read(dir.join("cell.blob.frame")).unwrap()).unwrap();
     let (bid, rec) = vocc::runtime::decode_blob(&frame, &std::fs::read(&blob).unwrap()).unwrap();
     assert_eq!(bid as u64, id);
     assert_eq!(rec.vos().len(), vos.len());
@@ -438,11 +438,16 @@ fn four_shards_in_four_processes_merge_into_the_single_bake() {
 /// A GeoJSON of square buildings (world coordinates): `(x, y, side, height)` each, attribute
 /// `height`.
 fn boxes_geojson(b: &[(f64, f64, f64, f64)]) -> String {
+    boxes_geojson_attr("height", b)
+}
+
+/// [`boxes_geojson`] with the height in attribute `attr`.
+fn boxes_geojson_attr(attr: &str, b: &[(f64, f64, f64, f64)]) -> String {
     let feats: Vec<String> = b
         .iter()
         .map(|&(x, y, s, h)| {
             format!(
-                r#"{{"type":"Feature","properties":{{"height":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]]}}}}"#,
+                r#"{{"type":"Feature","properties":{{"{attr}":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]]}}}}"#,
                 x + s,
                 x + s,
                 y + s,
@@ -580,4 +585,336 @@ fn cell_size_0_1_on_150_buildings_is_refused_at_once_not_run_for_minutes() {
     assert_eq!(res.status.code(), Some(2), "{err}");
     assert!(err.contains("cell size of 1 to 100000 metres"), "{err}");
     assert!(took.as_secs_f64() < 1.0, "refused after {took:?}");
+}
+
+/// Runs vocc and returns (exit code, stderr).
+fn run(args: &[&str]) -> (Option<i32>, String) {
+    let out = vocc(args);
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A tiny street of 3 x 3 buildings at Lyon's coordinates, baked on 50 m cells into
+/// `dir/tiny.vocc` (in well under a second).
+fn tiny_scene_and_store(dir: &std::path::Path) -> (String, String) {
+    let scene = dir.join("tiny.geojson");
+    std::fs::write(&scene, boxes_geojson(&block(1_842_000.0, 5_176_000.0, 3))).unwrap();
+    let store = dir.join("tiny.vocc");
+    let (s, t) = (
+        scene.to_str().unwrap().to_string(),
+        store.to_str().unwrap().to_string(),
+    );
+    let (rc, err) = run(&[
+        "bake",
+        &s,
+        "--height-attr",
+        "height",
+        "--cell-size",
+        "50",
+        "-o",
+        &t,
+    ]);
+    assert_eq!(rc, Some(0), "{err}");
+    (s, t)
+}
+
+/// Issue 13, defect 1: `vocc bake victim.geojson --height-attr HAUTEUR -o victim.geojson`
+/// exited 0 and turned the GeoJSON into a 1.9 KB store; `render ... SCENE -o SCENE`,
+/// `export S.vocc --obj S.vocc` and `export S.vocc --blob S.vocc` did the same. Every output
+/// that is an input is refused, compared as a file (another spelling, a hard link), and the
+/// input is left as it was.
+#[test]
+fn output_equal_to_an_input_is_refused_and_the_input_is_not_destroyed() {
+    let dir = common::temp_dir("cli-output-is-input");
+    let victim = dir.join("victim.geojson");
+    let text = boxes_geojson_attr("HAUTEUR", &block(1_842_000.0, 5_176_000.0, 3));
+    std::fs::write(&victim, &text).unwrap();
+    let v = victim.to_str().unwrap();
+    let (_, store) = tiny_scene_and_store(&dir);
+    let store_bytes = std::fs::read(&store).unwrap();
+    let other_spelling = format!("{}/./victim.geojson", dir.display());
+    let link = dir.join("link.geojson");
+    std::fs::hard_link(&victim, &link).unwrap();
+    let l = link.to_str().unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["bake", v, "--height-attr", "HAUTEUR", "-o", v],
+        vec!["bake", v, "--height-attr", "HAUTEUR", "-o", &other_spelling],
+        vec!["bake", v, "--height-attr", "HAUTEUR", "-o", l],
+        vec![
+            "render",
+            &store,
+            v,
+            "--height-attr",
+            "HAUTEUR",
+            "--cell",
+            "0",
+            "-o",
+            v,
+        ],
+        vec!["export", &store, "--cell", "0", "--obj", &store],
+        vec!["export", &store, "--cell", "0", "--blob", &store],
+        vec![
+            "render",
+            "--debug",
+            v,
+            "--height-attr",
+            "HAUTEUR",
+            "--at",
+            "1842010,5176010",
+            "-o",
+            v,
+        ],
+    ];
+    for args in cases {
+        let (rc, err) = run(&args);
+        assert_eq!(rc, Some(1), "{args:?}: {err}");
+        assert!(err.contains("is also an input"), "{args:?}: {err}");
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), text, "{args:?}");
+        assert_eq!(std::fs::read(&store).unwrap(), store_bytes, "{args:?}");
+    }
+    // `--reuse OLD -o OLD` would replace the old store the bake reads: refused too.
+    let (rc, err) = run(&[
+        "bake",
+        v,
+        "--height-attr",
+        "HAUTEUR",
+        "--cell-size",
+        "50",
+        "--reuse",
+        &store,
+        "-o",
+        &store,
+    ]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(err.contains("is also an input"), "{err}");
+}
+
+/// Issue 13, defect 5: a bake into a missing directory ran 26 s before failing. The output is
+/// checked before any work: here before the `--reuse` store (missing too) is even looked at.
+#[test]
+fn bake_into_a_missing_directory_fails_before_any_work() {
+    let dir = common::temp_dir("cli-missing-dir");
+    let (scene, _) = tiny_scene_and_store(&dir);
+    let out = dir.join("no/such/dir/city.vocc");
+    let (rc, err) = run(&[
+        "bake",
+        &scene,
+        "--height-attr",
+        "height",
+        "--reuse",
+        dir.join("missing.vocc").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(
+        err.contains("does not exist") && err.contains("no/such/dir"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("missing.vocc"),
+        "the output was not checked first: {err}"
+    );
+    // The same for every command that writes.
+    for args in [
+        vec![
+            "gen-city",
+            "--buildings",
+            "10",
+            "-o",
+            "/no/such/dir/c.geojson",
+        ],
+        vec![
+            "export",
+            &dir.join("tiny.vocc").to_str().unwrap().to_string(),
+            "--cell",
+            "0",
+            "--obj",
+            "/no/such/dir/c.obj",
+        ],
+    ]
+    .iter()
+    .map(|a| a.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+    {
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (rc, err) = run(&a);
+        assert_eq!(rc, Some(1), "{a:?}: {err}");
+        assert!(
+            err.contains("the folder /no/such/dir does not exist"),
+            "{a:?}: {err}"
+        );
+    }
+}
+
+/// Issue 13, defect 3: `gen-city --buildings 99999999999` asked for 4 TB and aborted. It is
+/// refused at once with the bound.
+#[test]
+fn gen_city_99999999999_buildings_is_refused_with_its_bound_not_aborted() {
+    let (rc, err) = run(&[
+        "gen-city",
+        "--buildings",
+        "99999999999",
+        "-o",
+        "/tmp/never.geojson",
+    ]);
+    assert_eq!(rc, Some(2), "{err}");
+    assert!(err.contains("from 1 to 10000000"), "{err}");
+    assert!(
+        !err.contains("memory allocation") && !err.contains("panicked"),
+        "{err}"
+    );
+    assert!(!std::path::Path::new("/tmp/never.geojson").exists());
+}
+
+/// Issue 13, defect 6: `render --radius 0` and negative values wrote SVGs with `inf`
+/// coordinates or empty ones, and `--storey-height -3` gave a store with 0 VOs. Every numeric
+/// option is checked by one rule: a usage error (exit 2) naming the option.
+#[test]
+fn render_radius_0_negative_values_and_storey_height_minus_3_are_refused() {
+    let dir = common::temp_dir("cli-bad-numbers");
+    let (scene, store) = tiny_scene_and_store(&dir);
+    let svg = dir.join("x.svg");
+    let o = svg.to_str().unwrap();
+    let render = |v: &str| {
+        run(&[
+            "render",
+            &store,
+            &scene,
+            "--height-attr",
+            "height",
+            "--cell",
+            "0",
+            "--radius",
+            v,
+            "-o",
+            o,
+        ])
+    };
+    for v in ["0", "-100", "inf", "NaN"] {
+        let (rc, err) = render(v);
+        assert_eq!(rc, Some(2), "--radius {v}: {err}");
+        assert!(err.contains("--radius"), "{err}");
+        assert!(!svg.exists(), "--radius {v} wrote a picture");
+    }
+    let out = dir.join("s.vocc");
+    for (flag, v) in [
+        ("--storey-height", "-3"),
+        ("--storey-height", "0"),
+        ("--cell-size", "-50"),
+        ("--threads", "0"),
+        ("--eye", "-1..2"),
+        ("--shard-count", "0"),
+    ] {
+        let (rc, err) = run(&[
+            "bake",
+            &scene,
+            "--height-attr",
+            "height",
+            flag,
+            v,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(rc, Some(2), "{flag} {v}: {err}");
+        assert!(err.contains(flag), "{flag} {v}: {err}");
+        assert!(!out.exists());
+    }
+    for (flag, v) in [("--eyes", "0"), ("--samples", "0"), ("--cells", "0")] {
+        let (rc, err) = run(&["eval", &store, &scene, "--height-attr", "height", flag, v]);
+        assert_eq!(rc, Some(2), "{flag} {v}: {err}");
+    }
+}
+
+/// Issue 13, defect 4: `merge sh0.vocc` (1 of 3) and `merge sh0.vocc sh0.vocc sh1.vocc`
+/// exited 0 and the result looked complete. Each shard's hashes record its index and count;
+/// a missing or repeated shard is refused, naming it.
+#[test]
+fn merge_of_an_incomplete_or_repeated_set_of_shards_is_refused() {
+    let dir = common::temp_dir("cli-merge-incomplete");
+    let (scene, whole) = tiny_scene_and_store(&dir);
+    let sh: Vec<String> = (0..3)
+        .map(|i| {
+            let p = dir
+                .join(format!("sh{i}.vocc"))
+                .to_str()
+                .unwrap()
+                .to_string();
+            let shard = format!("{i}/3");
+            let (rc, err) = run(&[
+                "bake",
+                &scene,
+                "--height-attr",
+                "height",
+                "--cell-size",
+                "50",
+                "--shard",
+                &shard,
+                "-o",
+                &p,
+            ]);
+            assert_eq!(rc, Some(0), "{err}");
+            p
+        })
+        .collect();
+    let m = dir.join("m.vocc");
+    let mo = m.to_str().unwrap();
+    let (rc, err) = run(&["merge", &sh[0], "-o", mo]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(err.contains("2 of 3 shards are missing: 1/3, 2/3"), "{err}");
+    let (rc, err) = run(&["merge", &sh[0], &sh[0], &sh[1], "-o", mo]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(err.contains("shard 0/3 is given twice"), "{err}");
+    assert!(!m.exists(), "no output after a refused merge");
+    // A whole bake is not a shard; a shard without its hashes cannot be placed.
+    let (rc, err) = run(&["merge", &sh[0], &sh[1], &whole, "-o", mo]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(err.contains("is not a shard"), "{err}");
+    // The complete set merges into the whole bake, byte for byte.
+    let (rc, err) = run(&["merge", &sh[2], &sh[0], &sh[1], "-o", mo]);
+    assert_eq!(rc, Some(0), "{err}");
+    assert_eq!(std::fs::read(&m).unwrap(), std::fs::read(&whole).unwrap());
+    std::fs::remove_file(format!("{}.hashes", sh[1])).unwrap();
+    let (rc, err) = run(&["merge", &sh[0], &sh[1], &sh[2], "-o", mo]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(
+        err.contains("cannot tell which shard") && err.contains("sh1.vocc.hashes"),
+        "{err}"
+    );
+}
+
+/// Issue 13, defect 10: a reuse bake with 0 cells rebaked printed "313.00 VOs per baked cell"
+/// (every VO of the store over max(baked, 1) = 1 cell). Counts are per selected cell, and a bake
+/// that baked nothing says so.
+#[test]
+fn a_reuse_bake_with_0_cells_rebaked_does_not_print_vos_per_baked_cell_over_one_cell() {
+    let dir = common::temp_dir("cli-reuse-zero");
+    let (scene, store) = tiny_scene_and_store(&dir);
+    let again = dir.join("again.vocc");
+    let (rc, err) = run(&[
+        "bake",
+        &scene,
+        "--height-attr",
+        "height",
+        "--cell-size",
+        "50",
+        "--reuse",
+        &store,
+        "-o",
+        again.to_str().unwrap(),
+    ]);
+    assert_eq!(rc, Some(0), "{err}");
+    assert!(err.contains("incremental: 0 of"), "{err}");
+    assert!(err.contains("no cell baked"), "{err}");
+    assert!(!err.contains("per baked cell,"), "{err}");
+    let v: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", &store, "--json"]).stdout).unwrap();
+    let want = format!(
+        "VOs: {} in {} cells ({:.2} per cell",
+        v["vos"],
+        v["cells"],
+        v["vos"].as_f64().unwrap() / v["cells"].as_f64().unwrap()
+    );
+    assert!(err.contains(&want), "{want:?} not in {err}");
 }

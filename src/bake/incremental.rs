@@ -32,11 +32,13 @@ use crate::runtime::grid::CellId;
 
 /// Magic of a `.hashes` file.
 pub const MAGIC: [u8; 8] = *b"VOCCHASH";
-/// Version of the `.hashes` layout.
-pub const VERSION: u16 = 1;
-/// Bytes before the per-cell hashes: magic, version, reserved, cell count, store checksum,
-/// global hash.
-const HEADER_LEN: usize = 8 + 2 + 2 + 4 + 4 + 8;
+/// Version of the `.hashes` layout this vocc writes (it reads 1 and 2; 2 adds the shard).
+pub const VERSION: u16 = 2;
+/// Bytes before the per-cell hashes of version 1: magic, version, reserved, cell count, store
+/// checksum, global hash.
+const HEADER_LEN_V1: usize = 8 + 2 + 2 + 4 + 4 + 8;
+/// Version 2 adds the shard index and count (`u32` each) after the global hash.
+const HEADER_LEN: usize = HEADER_LEN_V1 + 4 + 4;
 
 /// The content hashes of one bake.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -49,6 +51,9 @@ pub struct CellHashes {
     /// CRC-32 of the store file these hashes describe (0 until [`Self::encode`] is given it), so
     /// hashes beside another store than their own are never trusted.
     pub store_crc: u32,
+    /// `(index, count)` when the bake was one shard of `count` (`vocc bake --shard I/N`); `None`
+    /// for a whole bake or a merge, and in version 1 files.
+    pub shard: Option<(u32, u32)>,
 }
 
 /// Why a `.hashes` file was refused.
@@ -56,7 +61,7 @@ pub struct CellHashes {
 pub enum HashesError {
     #[error("not a vocc hashes file (bad magic)")]
     Magic,
-    #[error("hashes file version {0} is not supported (this vocc writes {VERSION})")]
+    #[error("hashes file version {0} is not supported (this vocc reads 1 and 2)")]
     Version(u16),
     #[error("hashes file is {got} bytes, its header says {want}")]
     Length { got: usize, want: usize },
@@ -193,6 +198,7 @@ impl CellHashes {
             global: g.finish(),
             cells: out,
             store_crc: 0,
+            shard: None,
         }
     }
 
@@ -212,8 +218,9 @@ impl CellHashes {
             .collect()
     }
 
-    /// The file form: magic, version (u16), reserved (u16, 0), cell count (u32), CRC-32 of the
-    /// store (u32), global hash (u64), one u64 per cell, CRC-32 of all before it; little-endian.
+    /// The file form (version 2): magic, version (u16), reserved (u16, 0), cell count (u32),
+    /// CRC-32 of the store (u32), global hash (u64), shard index (u32) and count (u32; 0 when
+    /// not a shard), one u64 per cell, CRC-32 of all before it; little-endian.
     pub fn encode(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(HEADER_LEN + 8 * self.cells.len() + 4);
         b.extend_from_slice(&MAGIC);
@@ -222,6 +229,9 @@ impl CellHashes {
         b.extend_from_slice(&(self.cells.len() as u32).to_le_bytes());
         b.extend_from_slice(&self.store_crc.to_le_bytes());
         b.extend_from_slice(&self.global.to_le_bytes());
+        let (i, n) = self.shard.unwrap_or((0, 0));
+        b.extend_from_slice(&i.to_le_bytes());
+        b.extend_from_slice(&n.to_le_bytes());
         for h in &self.cells {
             b.extend_from_slice(&h.to_le_bytes());
         }
@@ -231,27 +241,40 @@ impl CellHashes {
     }
 
     pub fn decode(b: &[u8]) -> Result<CellHashes, HashesError> {
-        if b.len() < HEADER_LEN + 4 || b[..8] != MAGIC {
+        if b.len() < HEADER_LEN_V1 + 4 || b[..8] != MAGIC {
             return Err(HashesError::Magic);
         }
         let u16_at = |i: usize| u16::from_le_bytes([b[i], b[i + 1]]);
+        let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().expect("4 bytes"));
         let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().expect("8 bytes"));
-        if u16_at(8) != VERSION {
-            return Err(HashesError::Version(u16_at(8)));
+        let head = match u16_at(8) {
+            1 => HEADER_LEN_V1,
+            2 if b.len() >= HEADER_LEN + 4 => HEADER_LEN,
+            2 => return Err(HashesError::Magic),
+            v => return Err(HashesError::Version(v)),
+        };
+        let n = u32_at(12) as usize;
+        let want = (n as u64)
+            .checked_mul(8)
+            .and_then(|x| x.checked_add(head as u64 + 4))
+            .unwrap_or(u64::MAX);
+        if b.len() as u64 != want {
+            return Err(HashesError::Length {
+                got: b.len(),
+                want: want.min(usize::MAX as u64) as usize,
+            });
         }
-        let n = u32::from_le_bytes(b[12..16].try_into().expect("4 bytes")) as usize;
-        let want = HEADER_LEN + 8 * n + 4;
-        if b.len() != want {
-            return Err(HashesError::Length { got: b.len(), want });
-        }
+        let want = want as usize;
         let body = &b[..want - 4];
         if crate::runtime::crc::crc32(body).to_le_bytes() != b[want - 4..] {
             return Err(HashesError::Checksum);
         }
+        let shard = (head == HEADER_LEN && u32_at(32) != 0).then(|| (u32_at(28), u32_at(32)));
         Ok(CellHashes {
             global: u64_at(20),
-            cells: (0..n).map(|i| u64_at(HEADER_LEN + 8 * i)).collect(),
-            store_crc: u32::from_le_bytes(b[16..20].try_into().expect("4 bytes")),
+            cells: (0..n).map(|i| u64_at(head + 8 * i)).collect(),
+            store_crc: u32_at(16),
+            shard,
         })
     }
 
@@ -261,6 +284,7 @@ impl CellHashes {
         let first = parts.first()?;
         let mut out = CellHashes {
             store_crc: 0,
+            shard: None,
             ..first.clone()
         };
         for p in &parts[1..] {
@@ -297,11 +321,20 @@ mod tests {
             global: 0x0123_4567_89ab_cdef,
             cells: vec![0, 7, u64::MAX],
             store_crc: 0xdead_beef,
+            shard: Some((2, 5)),
         };
         let b = h.encode();
         assert_eq!(b.len(), HEADER_LEN + 24 + 4);
         assert_eq!(&b[..8], b"VOCCHASH");
+        assert_eq!(&b[8..10], &[2, 0], "version 2");
+        assert_eq!(&b[28..36], &[2, 0, 0, 0, 5, 0, 0, 0], "shard 2 of 5");
         assert_eq!(CellHashes::decode(&b), Ok(h.clone()));
+        let whole = CellHashes {
+            shard: None,
+            ..h.clone()
+        };
+        assert_eq!(&whole.encode()[28..36], &[0; 8], "count 0: not a shard");
+        assert_eq!(CellHashes::decode(&whole.encode()), Ok(whole.clone()));
         let mut bad = b.clone();
         bad[HEADER_LEN + 9] ^= 1;
         assert_eq!(CellHashes::decode(&bad), Err(HashesError::Checksum));
@@ -312,10 +345,24 @@ mod tests {
                 want: b.len()
             })
         );
-        let mut v2 = b.clone();
-        v2[8] = 2;
-        assert_eq!(CellHashes::decode(&v2), Err(HashesError::Version(2)));
+        let mut v3 = b.clone();
+        v3[8] = 3;
+        assert_eq!(CellHashes::decode(&v3), Err(HashesError::Version(3)));
         assert_eq!(CellHashes::decode(b"VOCCSTOR"), Err(HashesError::Magic));
+        // Version 1 (no shard fields), as vocc wrote it before: still read.
+        let mut v1 = Vec::new();
+        v1.extend_from_slice(b"VOCCHASH");
+        v1.extend_from_slice(&1u16.to_le_bytes());
+        v1.extend_from_slice(&0u16.to_le_bytes());
+        v1.extend_from_slice(&3u32.to_le_bytes());
+        v1.extend_from_slice(&0xdead_beefu32.to_le_bytes());
+        v1.extend_from_slice(&h.global.to_le_bytes());
+        for c in &h.cells {
+            v1.extend_from_slice(&c.to_le_bytes());
+        }
+        let crc = crate::runtime::crc::crc32(&v1);
+        v1.extend_from_slice(&crc.to_le_bytes());
+        assert_eq!(CellHashes::decode(&v1), Ok(whole));
     }
 
     #[test]
@@ -324,11 +371,13 @@ mod tests {
             global: 5,
             cells: vec![11, 0, 13],
             store_crc: 1,
+            shard: Some((0, 2)),
         };
         let b = CellHashes {
             global: 5,
             cells: vec![0, 12, 0],
             store_crc: 2,
+            shard: Some((1, 2)),
         };
         assert_eq!(
             CellHashes::merge(&[a.clone(), b.clone()]).unwrap().cells,
@@ -338,6 +387,7 @@ mod tests {
             global: 5,
             cells: vec![99, 0, 0],
             store_crc: 3,
+            shard: None,
         };
         assert_eq!(CellHashes::merge(&[a.clone(), c]), None);
         let d = CellHashes { global: 6, ..b };

@@ -418,6 +418,7 @@ impl<'s> BakeJob<'s> {
         let store = encode_store(&plan.frame, &recs).map_err(JobError::Encode)?;
         let hashes = CellHashes {
             store_crc: crc32(&store),
+            shard: self.shard,
             ..hashes
         }
         .encode();

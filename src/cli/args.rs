@@ -24,7 +24,7 @@ pub struct ReadArgs {
     #[arg(long, value_name = "NAME")]
     pub levels_attr: Option<String>,
     /// Metres per storey for --levels-attr.
-    #[arg(long, default_value_t = 3.0, value_name = "M", value_parser = parse_positive)]
+    #[arg(long, default_value_t = 3.0, value_name = "M", value_parser = parse_positive, allow_hyphen_values = true)]
     pub storey_height: f64,
     /// CityJSON: level of detail to read (default: the highest each object has).
     #[arg(long)]

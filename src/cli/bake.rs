@@ -19,7 +19,7 @@ use crate::args::{
     parse_cell_size, parse_count, parse_count_u32, parse_eye, parse_max_vos, parse_rect,
     parse_slices, ReadArgs,
 };
-use crate::files::{parse, read_store, write_atomically};
+use crate::files::{check_output, parse, read_store, write_atomically};
 
 #[derive(Args)]
 pub struct BakeArgs {
@@ -32,10 +32,10 @@ pub struct BakeArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Side of the square view cells, metres.
-    #[arg(long, default_value_t = 100.0, value_name = "M", value_parser = parse_cell_size)]
+    #[arg(long, default_value_t = 100.0, value_name = "M", value_parser = parse_cell_size, allow_hyphen_values = true)]
     pub cell_size: f64,
     /// Eye heights above the ground, metres: LOW..HIGH.
-    #[arg(long, default_value = "1.5..2.0", value_parser = parse_eye, value_name = "LOW..HIGH")]
+    #[arg(long, default_value = "1.5..2.0", value_parser = parse_eye, value_name = "LOW..HIGH", allow_hyphen_values = true)]
     pub eye: (f64, f64),
     /// Slices per cell: `auto` (up to 5) or 1 to 5.
     #[arg(long, default_value = "auto", value_parser = parse_slices)]
@@ -126,6 +126,15 @@ pub fn shard(
 
 pub fn run(a: BakeArgs) -> Result<()> {
     let t0 = Instant::now();
+    // Before any work: the outputs can be written and are none of the inputs.
+    let mut inputs: Vec<PathBuf> = a.scene.clone();
+    inputs.extend(a.cells.iter().cloned());
+    if let Some(r) = &a.reuse {
+        inputs.extend([r.clone(), hashes_path(r)]);
+    }
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    check_output(&a.output, &inputs)?;
+    check_output(&hashes_path(&a.output), &inputs)?;
     let shard = match &a.shard {
         Some(spec) => Some(shard(spec, a.shard_count, &|k| std::env::var(k).ok())?),
         None => None,

@@ -21,7 +21,7 @@ use vocc::runtime::culler::BoxTree;
 use vocc::scene::{self, ReadOptions};
 
 use crate::args::{parse_count, ReadArgs};
-use crate::files::{parse, read_store, write_atomically};
+use crate::files::{check_output, parse, read_store, write_atomically};
 
 /// Ground-truth sampling options.
 #[derive(Args, Clone)]
@@ -187,6 +187,11 @@ pub fn results(a: ResultsArgs) -> Result<()> {
             flags: String::new(),
         },
     ];
+    let inputs: Vec<&std::path::Path> = datasets
+        .iter()
+        .flat_map(|d| d.files.iter().map(PathBuf::as_path))
+        .collect();
+    check_output(&a.output, &inputs)?;
     let params = SuiteParams {
         truth: a.truth.params(),
         sample: a.sample,

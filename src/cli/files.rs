@@ -20,6 +20,64 @@ pub fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<Store<'a>> {
     Store::parse(bytes).with_context(|| format!("{} is not a valid vocc store", path.display()))
 }
 
+/// Whether `a` and `b` name one existing file (same device and inode on Unix; the same
+/// canonical path elsewhere), however they are spelled.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        ma.dev() == mb.dev() && ma.ino() == mb.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (ma, mb);
+        matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+    }
+}
+
+/// Checks, before any work, that `output` can be written: it is none of `inputs` (compared as
+/// files, not names), not a folder, and its folder exists and takes a new file (its temporary
+/// file is created and removed).
+pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
+    let name = output
+        .file_name()
+        .with_context(|| format!("{} is not a file path", output.display()))?;
+    if let Some(i) = inputs.iter().find(|i| same_file(output, i)) {
+        anyhow::bail!(
+            "the output {} is also an input ({}): vocc never overwrites its inputs; write to another file",
+            output.display(),
+            i.display()
+        );
+    }
+    if output.is_dir() {
+        anyhow::bail!("the output {} is a folder", output.display());
+    }
+    let dir = match output.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        anyhow::bail!(
+            "cannot write {}: the folder {} does not exist",
+            output.display(),
+            dir.display()
+        );
+    }
+    let tmp = output.with_file_name(format!(".{}.tmp", name.to_string_lossy()));
+    std::fs::File::create(&tmp).with_context(|| {
+        format!(
+            "cannot write {}: cannot create a file in {}",
+            output.display(),
+            dir.display()
+        )
+    })?;
+    let _ = std::fs::remove_file(&tmp);
+    Ok(())
+}
+
 /// Writes through a temporary file in the same folder (`.NAME.tmp`), then renames, so an
 /// interrupted run never leaves a complete-looking output: the output path holds either its old
 /// content or the new one in full. Every failure names the output and the temporary file and

@@ -112,13 +112,13 @@ enum Command {
         at: Option<(f64, f64)>,
         /// --debug: side of the square cells, metres (grid anchored at the scene's minimum
         /// corner).
-        #[arg(long, default_value_t = 100.0, value_name = "M", value_parser = parse_cell_size)]
+        #[arg(long, default_value_t = 100.0, value_name = "M", value_parser = parse_cell_size, allow_hyphen_values = true)]
         cell_size: f64,
         /// --debug: slice height in world metres (default: half the median building height).
         #[arg(long, value_name = "Z", value_parser = parse_num, allow_hyphen_values = true)]
         slice: Option<f64>,
         /// Store mode: metres shown around the cell's centre.
-        #[arg(long, default_value_t = 500.0, value_name = "M", value_parser = parse_positive)]
+        #[arg(long, default_value_t = 500.0, value_name = "M", value_parser = parse_positive, allow_hyphen_values = true)]
         radius: f64,
         #[command(flatten)]
         read: ReadArgs,
@@ -214,6 +214,7 @@ fn run(cli: Cli) -> Result<()> {
             seed,
             output,
         } => {
+            files::check_output(&output, &[])?;
             let t = Instant::now();
             let city = scene::gencity::generate(&scene::gencity::CityParams { buildings, seed });
             write_atomically(&output, |w| scene::gencity::write_geojson(w, &city))?;

@@ -15,7 +15,7 @@ use vocc::runtime::CellId;
 use vocc::scene;
 
 use crate::args::ReadArgs;
-use crate::files::{parse, read_store, write_atomically};
+use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::store::which_cell;
 
 /// `vocc render --debug SCENE... --at X,Y`: the 2D growth of one slice of the cell holding the
@@ -29,6 +29,8 @@ pub fn render_debug(
     output: &Path,
 ) -> Result<()> {
     let at = at.context("--debug needs --at X,Y")?;
+    let inputs: Vec<&Path> = scene_files.iter().map(PathBuf::as_path).collect();
+    check_output(output, &inputs)?;
     let s = scene::load(scene_files, &read.options())?;
     let local = glam::DVec2::new(at.0 - s.origin.x, at.1 - s.origin.y);
     let z = match slice {
@@ -73,6 +75,8 @@ pub fn render_store(
         !scene_files.is_empty(),
         "give the scene files after the store"
     );
+    let inputs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    check_output(output, &inputs)?;
     let bytes = read_store(store_path)?;
     let store = parse(store_path, &bytes)?;
     let id = which_cell(&store, cell, at)?;

@@ -20,7 +20,7 @@ use vocc::runtime::{CellId, Frame};
 use vocc::scene;
 
 use crate::args::ReadArgs;
-use crate::files::{parse, read_store, write_atomically};
+use crate::files::{check_output, parse, read_store, write_atomically};
 
 fn cell_record(store: &Store, id: CellId) -> Result<CellRecord> {
     anyhow::ensure!(
@@ -240,7 +240,22 @@ pub enum ExportTo {
     Blob(PathBuf),
 }
 
+/// Where `export --blob FILE` writes the frame: beside it, `FILE.frame`.
+pub fn frame_path(blob: &Path) -> PathBuf {
+    let mut s = blob.as_os_str().to_owned();
+    s.push(".frame");
+    PathBuf::from(s)
+}
+
 pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
+    match &to {
+        ExportTo::Json => {}
+        ExportTo::Obj(f) => check_output(f, &[&path])?,
+        ExportTo::Blob(f) => {
+            check_output(f, &[&path])?;
+            check_output(&frame_path(f), &[&path])?;
+        }
+    }
     let bytes = read_store(&path)?;
     let store = parse(&path, &bytes)?;
     let rec = cell_record(&store, id)?;
@@ -278,7 +293,7 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
             let blob = encode_blob(&f, id, &rec)?;
             write_atomically(&file, |w| w.write_all(&blob))?;
             // The frame an engine needs beside its blobs, once per store.
-            let frame_file = file.with_extension("frame");
+            let frame_file = frame_path(&file);
             write_atomically(&frame_file, |w| w.write_all(&encode_frame(&f)))?;
             eprintln!(
                 "wrote cell {id} ({} VOs) as a {}-byte blob to {}, and the {}-byte frame it decodes with to {}",
@@ -294,11 +309,18 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
 }
 
 /// `vocc merge SHARD... -o STORE`: the shards of one bake (`vocc bake --shard I/N`) joined into
-/// the store a single bake writes. Every shard must have the same frame; each cell's record is
-/// the one shard's that baked it (cells no shard baked, and cells with no VOs, stay empty); two
-/// shards disagreeing on a cell is an error.
+/// the store a single bake writes. Every shard must carry its own `.hashes` file (which records
+/// its index and count), every index `0..N` must be given exactly once, and every shard must have
+/// the same frame and options; each cell's record is the one shard's that baked it (cells no
+/// shard baked, and cells with no VOs, stay empty); two shards disagreeing on a cell is an error.
 pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
     anyhow::ensure!(!shards.is_empty(), "give the shard files to merge");
+    let hashes_out = hashes_path(output);
+    let mut inputs: Vec<PathBuf> = shards.clone();
+    inputs.extend(shards.iter().map(|p| hashes_path(p)));
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    check_output(output, &inputs)?;
+    check_output(&hashes_out, &inputs)?;
     let bytes: Vec<Vec<u8>> = shards
         .iter()
         .map(|p| read_store(p))
@@ -317,6 +339,75 @@ pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
             shards[0].display()
         );
     }
+    // Each shard's hashes: which shard it is, and the content hashes the merge carries on.
+    let mut hashes = Vec::with_capacity(shards.len());
+    for (p, b) in shards.iter().zip(&bytes) {
+        let hp = hashes_path(p);
+        let why = match std::fs::read(&hp) {
+            Err(e) => format!("cannot read {} ({e})", hp.display()),
+            Ok(hb) => match CellHashes::decode(&hb) {
+                Err(e) => format!("{} is damaged ({e})", hp.display()),
+                Ok(h) if h.store_crc != crc32(b) => {
+                    format!("{} belongs to another store", hp.display())
+                }
+                Ok(h) if h.shard.is_none() => anyhow::bail!(
+                    "{} is not a shard: its hashes record a whole bake or a merge (bake shards with --shard I/N)",
+                    p.display()
+                ),
+                Ok(h) => {
+                    hashes.push(h);
+                    continue;
+                }
+            },
+        };
+        anyhow::bail!(
+            "cannot tell which shard {} is: {why} (every `vocc bake --shard` writes one beside its store; keep it with the shard)",
+            p.display()
+        );
+    }
+    let ids: Vec<(u32, u32)> = hashes.iter().filter_map(|h| h.shard).collect();
+    let count = ids[0].1;
+    if let Some(k) = ids.iter().position(|&(_, n)| n != count) {
+        anyhow::bail!(
+            "{} is shard {}/{} but {} is shard {}/{}: shards must come from one bake",
+            shards[0].display(),
+            ids[0].0,
+            count,
+            shards[k].display(),
+            ids[k].0,
+            ids[k].1
+        );
+    }
+    let mut seen: Vec<Option<usize>> = vec![None; count as usize];
+    for (k, &(i, _)) in ids.iter().enumerate() {
+        if let Some(first) = seen[i as usize] {
+            anyhow::bail!(
+                "shard {i}/{count} is given twice: {} and {}",
+                shards[first].display(),
+                shards[k].display()
+            );
+        }
+        seen[i as usize] = Some(k);
+    }
+    let missing: Vec<String> = (0..count)
+        .filter(|&i| seen[i as usize].is_none())
+        .map(|i| format!("{i}/{count}"))
+        .collect();
+    if !missing.is_empty() {
+        anyhow::bail!(
+            "{} of {count} shards are missing: {} (given: {})",
+            missing.len(),
+            missing.join(", "),
+            ids.iter()
+                .zip(&shards)
+                .map(|((i, n), p)| format!("{i}/{n} {}", p.display()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    let merged = CellHashes::merge(&hashes).with_context(|| {
+        "the shards' hashes do not agree (other options, or two shards hashing one cell differently): shards must come from one bake"
+    })?;
     let n = stores[0].cell_count();
     let mut from = vec![0usize; stores.len()];
     let mut records = Vec::with_capacity(n as usize);
@@ -349,44 +440,25 @@ pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
     let out = vocc::runtime::format::encode_store(&frame, &records)?;
     // The shards' hashes, merged, so the merged store can serve `bake --reuse` (stale hashes are
     // removed before the store is written; see `bake`).
-    let hashes: Option<Vec<CellHashes>> = shards
-        .iter()
-        .map(|p| {
-            let b = std::fs::read(hashes_path(p)).ok()?;
-            let h = CellHashes::decode(&b).ok()?;
-            (h.store_crc == crc32(&read_store(p).ok()?)).then_some(h)
-        })
-        .collect();
-    let merged = hashes.and_then(|h| CellHashes::merge(&h));
-    let hashes_file = hashes_path(output);
-    match std::fs::remove_file(&hashes_file) {
+    match std::fs::remove_file(&hashes_out) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-            return Err(e).with_context(|| format!("cannot remove {}", hashes_file.display()))
+            return Err(e).with_context(|| format!("cannot remove {}", hashes_out.display()))
         }
         _ => {}
     }
     write_atomically(output, |w| w.write_all(&out))?;
-    match merged {
-        Some(h) => {
-            let h = CellHashes {
-                store_crc: crc32(&out),
-                ..h
-            };
-            write_atomically(&hashes_file, |w| w.write_all(&h.encode()))?;
-        }
-        None => eprintln!(
-            "note: not every shard has its own valid .hashes file, so {} gets none (a later `bake --reuse` of it bakes every cell)",
-            output.display()
-        ),
-    }
+    let h = CellHashes {
+        store_crc: crc32(&out),
+        ..merged
+    };
+    write_atomically(&hashes_out, |w| w.write_all(&h.encode()))?;
     let parts: Vec<String> = shards
         .iter()
         .zip(&from)
         .map(|(p, c)| format!("{} {c}", p.display()))
         .collect();
     eprintln!(
-        "merged {} shards ({} cells with VOs or skipped: {}) into {} ({} bytes)",
-        shards.len(),
+        "merged {count} of {count} shards ({} cells with VOs or skipped: {}) into {} ({} bytes)",
         from.iter().sum::<usize>(),
         parts.join(", "),
         output.display(),
