@@ -100,7 +100,7 @@ impl PreparedVo {
             b = [b[0] - d[0] * s, b[1] - d[1] * s];
         }
         let cs = corners(view);
-        let sides: Vec<f64> = cs.iter().map(|&c| orient(a, b, c)).collect();
+        let sides = cs.map(|c| orient(a, b, c));
         if sides.iter().all(|&s| s < 0.0) {
             std::mem::swap(&mut a, &mut b);
         } else if !sides.iter().all(|&s| s > 0.0) {
