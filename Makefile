@@ -3,18 +3,21 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test demo bench scale eval lint fresh-clone pictures fuzz
+.PHONY: build test demo bench scale eval lint fresh-clone pictures fuzz header c-bench
 
 build:
 	$(CARGO) build --release
 
 # The whole test suite, as CI runs it: all tests, the embeddable core without the geometry stack
-# (and that it depends on thiserror alone), formatting.
+# (and that it depends on thiserror alone), the C ABI (capi/: its tests, the header against
+# cbindgen, the C example against `vocc pvs`), formatting.
 test:
 	$(CARGO) test --locked
 	$(CARGO) test --locked --lib --no-default-features
 	@deps="$$($(CARGO) tree --locked --no-default-features -e normal --depth 1 --prefix none | awk 'NR > 1 {print $$1}' | sort -u | tr '\n' ' ')"; \
 	  test "$$deps" = "thiserror " || { echo "runtime dependencies: $$deps(ARCHITECTURE.md invariant 9 allows thiserror alone)" >&2; exit 1; }
+	$(CARGO) test --locked -p vocc-capi
+	CARGO="$(CARGO)" examples/c/test.sh
 	$(CARGO) fmt --all -- --check
 
 # The main job on the bundled example: bake Lyon into an occluder store, then describe it.
@@ -59,3 +62,20 @@ pictures:
 FUZZ_SECONDS ?= 600
 fuzz:
 	fuzz/run.sh $(FUZZ_SECONDS)
+
+# Regenerates the C header capi/include/vocc.h from capi/src/lib.rs (cbindgen); `make test` fails
+# while the committed header differs.
+header:
+	VOCC_BLESS_HEADER=1 $(CARGO) test --locked -p vocc-capi --test header
+
+# The culler through the C ABI, µs per cell entry on Lyon (docs/EMBEDDING.md); the Rust figure
+# is `cargo bench --bench culler`. C_BENCH_BOXES/C_BENCH_STORE run it on other files.
+c-bench:
+	$(CARGO) build --locked --release -p vocc-capi
+	$(CARGO) build --locked --release --bin vocc --example boxes
+	mkdir -p target/tmp/c-bench
+	cc -std=c99 -O2 -Icapi/include examples/c/bench.c target/release/libvocc.a -lm -lpthread -ldl \
+		-o target/tmp/c-bench/bench
+	target/release/vocc bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/tmp/c-bench/lyon.vocc
+	target/release/examples/boxes $(DEMO_SCENE) --height-attr HAUTEUR -o target/tmp/c-bench/lyon.boxes
+	target/tmp/c-bench/bench target/tmp/c-bench/lyon.vocc target/tmp/c-bench/lyon.boxes 30

@@ -1,0 +1,885 @@
+//! The C ABI of the vocc runtime: the store format and culler of `vocc` built with no default
+//! features (no geometry stack), as `libvocc.so` / `libvocc.a` with the header
+//! `include/vocc.h`, which cbindgen generates from this file (its doc comments become the
+//! header's). The ownership and thread rules are in the header's preamble (`cbindgen.toml`).
+//!
+//! Input: caller memory through raw pointers: store, frame and blob bytes, object boxes, cell
+//! records, output buffers. Output: status codes (`VOCC_OK` or a `VOCC_ERR_*`), an optional
+//! [`VoccError`] with the library's message, values written to caller memory, and opaque
+//! objects ([`VoccStore`], [`VoccTree`], [`VoccQuery`]) the caller frees.
+//! Invariants:
+//! - no panic crosses the boundary: every entry point runs inside `catch_unwind`, and a panic
+//!   (a bug) is reported as `VOCC_ERR_PANIC`;
+//! - every pointer is checked for NULL before use and every length or count for range before a
+//!   slice is made of it; a required output is written only on success (out-pointers of
+//!   constructors are set to NULL on failure);
+//! - a frame or cell coming from the caller is checked (frame rules F1..F12, VO fields in
+//!   range, no degenerate VO) before the culler sees it, so the culler only runs on what a
+//!   decoder would have accepted;
+//! - the culling path allocates nothing: [`vocc_pvs`] and [`vocc_pvs_bitmap`] run the Rust
+//!   culler into the [`VoccQuery`]'s vector, reserved for the tree when the query is made, and
+//!   copy the result into the caller's buffer;
+//! - this file wraps `vocc::runtime` and decides nothing about occlusion itself.
+
+#![deny(unsafe_op_in_unsafe_fn)]
+
+use std::ffi::c_char;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::ptr;
+
+use vocc::runtime::format::{decode_blob, decode_frame, validate_frame, CellRecord, FormatError};
+use vocc::runtime::frame::{HEIGHT_LEVELS, QUANT_STEPS};
+use vocc::runtime::{pvs, BoxTree, CellId, Frame, GridDescriptor, QVo, Store, MAX_VOS_PER_CELL};
+
+/// Success.
+pub const VOCC_OK: i32 = 0;
+/// A required pointer was NULL.
+pub const VOCC_ERR_NULL: i32 = 1;
+/// An argument is out of range: a length or count, a cell record field, a query made for a
+/// smaller tree.
+pub const VOCC_ERR_ARGUMENT: i32 = 2;
+/// The output buffer is too small; the count written tells the size needed.
+pub const VOCC_ERR_BUFFER_TOO_SMALL: i32 = 3;
+/// A position or cell id outside the frame's grid.
+pub const VOCC_ERR_OUTSIDE_GRID: i32 = 4;
+/// Bytes refused by a decoder (docs/FORMAT.md section 8); the message names the rule and the
+/// offset.
+pub const VOCC_ERR_FORMAT: i32 = 5;
+/// A store or blob of a major version this library does not read.
+pub const VOCC_ERR_VERSION: i32 = 6;
+/// A checksum mismatch: the bytes were damaged.
+pub const VOCC_ERR_CHECKSUM: i32 = 7;
+/// A frame that breaks a rule F1..F12 of docs/FORMAT.md section 4.1.
+pub const VOCC_ERR_FRAME: i32 = 8;
+/// An internal error caught at the boundary (a bug in vocc: please report it).
+pub const VOCC_ERR_PANIC: i32 = 9;
+
+/// At most this many VOs per cell.
+pub const VOCC_MAX_VOS: usize = 10;
+/// Bytes of a `VoccError` message, with its terminating NUL.
+pub const VOCC_MESSAGE_LEN: usize = 256;
+/// Length of an encoded frame (the `.frame` file beside a store's blobs).
+pub const VOCC_FRAME_BYTES: usize = 112;
+
+const _: () = assert!(VOCC_MAX_VOS == MAX_VOS_PER_CELL);
+const _: () = assert!(VOCC_FRAME_BYTES == vocc::runtime::format::FRAME_LEN);
+
+/// What went wrong: the status code again, and a NUL-terminated UTF-8 message (empty on
+/// success), truncated to fit.
+#[repr(C)]
+pub struct VoccError {
+    pub code: i32,
+    pub message: [c_char; VOCC_MESSAGE_LEN],
+}
+
+/// What a decoder needs beside a cell's bytes (docs/FORMAT.md section 4): the scene origin,
+/// the cell grid, the VO quantization and the vertical frame. Cell (i, j) has id `j * nx + i`
+/// and covers `[min_x + i * cell_size, min_x + (i + 1) * cell_size)` and likewise in y.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoccFrame {
+    /// World position of the local origin: world = local + origin.
+    pub origin: [f64; 3],
+    /// Local x and y of the grid's minimum corner, metres.
+    pub min_x: f64,
+    pub min_y: f64,
+    /// Side of a square cell, metres.
+    pub cell_size: f64,
+    /// Columns and rows.
+    pub nx: u32,
+    pub ny: u32,
+    /// Step of the VO endpoint grid, metres.
+    pub quantum: f64,
+    /// Eye heights above a cell's ground, metres.
+    pub eye_lo: f64,
+    pub eye_hi: f64,
+    /// Local height of ground level 0 and the step between levels, metres.
+    pub ground_z0: f64,
+    pub ground_step: f64,
+    /// VO top of level k: e1 + h0 * (h_ratio^k - 1), with e1 the cell's top eye.
+    pub h0: f64,
+    pub h_ratio: f64,
+}
+
+/// One stored VO: endpoint grid indices (0..512) and a height level (0..16).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VoccVo {
+    pub x1: u16,
+    pub y1: u16,
+    pub x2: u16,
+    pub y2: u16,
+    pub level: u8,
+}
+
+/// One cell's record. `skipped` is 1 for a cell inside a building (no VOs: everything is
+/// potentially visible), else 0; `ground` is the cell's ground level; `vos[0..count]` are its
+/// VOs, most effective first.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VoccCell {
+    pub skipped: u8,
+    pub ground: u8,
+    pub count: u8,
+    pub vos: [VoccVo; VOCC_MAX_VOS],
+}
+
+/// A VO as geometry, local frame: the segment a-b standing from height g to height h.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VoccVoGeom {
+    pub a: [f64; 2],
+    pub b: [f64; 2],
+    pub g: f64,
+    pub h: f64,
+}
+
+/// A parsed store; borrows the bytes given to `vocc_store_open`.
+pub struct VoccStore {
+    store: Store<'static>,
+}
+
+/// The bounding volume hierarchy over a scene's object boxes, built once per scene.
+pub struct VoccTree {
+    tree: BoxTree,
+}
+
+/// Scratch memory for PVS queries over trees of up to a given size; one thread at a time.
+pub struct VoccQuery {
+    out: Vec<u32>,
+    objects: usize,
+}
+
+// ---------------------------------------------------------------------------------------------
+// The boundary: status codes, messages, panics.
+
+struct Fail {
+    code: i32,
+    message: String,
+}
+
+fn fail(code: i32, message: impl Into<String>) -> Fail {
+    Fail {
+        code,
+        message: message.into(),
+    }
+}
+
+impl From<FormatError> for Fail {
+    fn from(e: FormatError) -> Fail {
+        let code = match e {
+            FormatError::UnsupportedVersion { .. } => VOCC_ERR_VERSION,
+            FormatError::Checksum { .. } => VOCC_ERR_CHECKSUM,
+            FormatError::BadFrame(_) => VOCC_ERR_FRAME,
+            FormatError::CellOutOfGrid { .. } => VOCC_ERR_OUTSIDE_GRID,
+            _ => VOCC_ERR_FORMAT,
+        };
+        fail(code, e.to_string())
+    }
+}
+
+/// Writes the code and message into `err` when it is not NULL.
+fn report(err: *mut VoccError, code: i32, message: &str) {
+    // SAFETY: the caller passes NULL or a pointer to a writable VoccError.
+    let Some(e) = (unsafe { err.as_mut() }) else {
+        return;
+    };
+    e.code = code;
+    let mut n = message.len().min(VOCC_MESSAGE_LEN - 1);
+    while !message.is_char_boundary(n) {
+        n -= 1;
+    }
+    for (dst, &src) in e.message.iter_mut().zip(&message.as_bytes()[..n]) {
+        *dst = src as c_char;
+    }
+    e.message[n] = 0;
+}
+
+/// Runs `f` at the boundary: its result becomes a status code and `err`; a panic becomes
+/// `VOCC_ERR_PANIC`.
+fn guard(err: *mut VoccError, f: impl FnOnce() -> Result<(), Fail>) -> i32 {
+    let r = catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|p| {
+        let what = p
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| p.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(fail(VOCC_ERR_PANIC, format!("internal error: {what}")))
+    });
+    match r {
+        Ok(()) => {
+            report(err, VOCC_OK, "");
+            VOCC_OK
+        }
+        Err(Fail { code, message }) => {
+            report(err, code, &message);
+            code
+        }
+    }
+}
+
+/// A shared reference from a pointer that may be NULL.
+fn get<'a, T>(p: *const T, what: &str) -> Result<&'a T, Fail> {
+    // SAFETY: the caller passes NULL or a pointer to a live, properly aligned T.
+    unsafe { p.as_ref() }.ok_or_else(|| fail(VOCC_ERR_NULL, format!("{what} is NULL")))
+}
+
+fn get_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Fail> {
+    // SAFETY: as for `get`, and the T is not aliased during the call.
+    unsafe { p.as_mut() }.ok_or_else(|| fail(VOCC_ERR_NULL, format!("{what} is NULL")))
+}
+
+/// `len` elements at `p`; NULL is allowed for an empty slice.
+fn slice<'a, T>(p: *const T, len: usize, what: &str) -> Result<&'a [T], Fail> {
+    if len == 0 {
+        return Ok(&[]);
+    }
+    if p.is_null() {
+        return Err(fail(VOCC_ERR_NULL, format!("{what} is NULL")));
+    }
+    if len
+        .checked_mul(size_of::<T>())
+        .is_none_or(|b| b > isize::MAX as usize)
+    {
+        return Err(fail(
+            VOCC_ERR_ARGUMENT,
+            format!("{what}: length {len} too large"),
+        ));
+    }
+    // SAFETY: non-NULL, and the caller guarantees `len` readable elements at `p`.
+    Ok(unsafe { std::slice::from_raw_parts(p, len) })
+}
+
+fn slice_mut<'a, T>(p: *mut T, len: usize, what: &str) -> Result<&'a mut [T], Fail> {
+    if len == 0 {
+        return Ok(&mut []);
+    }
+    if p.is_null() {
+        return Err(fail(VOCC_ERR_NULL, format!("{what} is NULL")));
+    }
+    if len
+        .checked_mul(size_of::<T>())
+        .is_none_or(|b| b > isize::MAX as usize)
+    {
+        return Err(fail(
+            VOCC_ERR_ARGUMENT,
+            format!("{what}: length {len} too large"),
+        ));
+    }
+    // SAFETY: non-NULL, and the caller guarantees `len` writable elements at `p`, unaliased.
+    Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
+}
+
+/// Sets a constructor's out-pointer to NULL up front, so it is NULL on every failure.
+fn clear_out<T>(out: *mut *mut T) {
+    // SAFETY: the caller passes NULL or a writable pointer slot.
+    if let Some(o) = unsafe { out.as_mut() } {
+        *o = ptr::null_mut();
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Conversions, checked.
+
+impl From<&Frame> for VoccFrame {
+    fn from(f: &Frame) -> VoccFrame {
+        VoccFrame {
+            origin: f.origin,
+            min_x: f.grid.min_x,
+            min_y: f.grid.min_y,
+            cell_size: f.grid.cell_size,
+            nx: f.grid.nx,
+            ny: f.grid.ny,
+            quantum: f.quantum,
+            eye_lo: f.eye_lo,
+            eye_hi: f.eye_hi,
+            ground_z0: f.ground_z0,
+            ground_step: f.ground_step,
+            h0: f.h0,
+            h_ratio: f.h_ratio,
+        }
+    }
+}
+
+/// The caller's frame, checked against rules F1..F12.
+fn frame_of(f: *const VoccFrame) -> Result<Frame, Fail> {
+    let f = get(f, "frame")?;
+    let frame = Frame {
+        origin: f.origin,
+        grid: GridDescriptor {
+            min_x: f.min_x,
+            min_y: f.min_y,
+            cell_size: f.cell_size,
+            nx: f.nx,
+            ny: f.ny,
+        },
+        quantum: f.quantum,
+        eye_lo: f.eye_lo,
+        eye_hi: f.eye_hi,
+        ground_z0: f.ground_z0,
+        ground_step: f.ground_step,
+        h0: f.h0,
+        h_ratio: f.h_ratio,
+    };
+    validate_frame(&frame)?;
+    Ok(frame)
+}
+
+impl From<&CellRecord> for VoccCell {
+    fn from(r: &CellRecord) -> VoccCell {
+        let mut c = VoccCell {
+            skipped: matches!(r, CellRecord::Skipped) as u8,
+            ground: r.ground(),
+            count: r.vos().len() as u8,
+            ..VoccCell::default()
+        };
+        for (dst, q) in c.vos.iter_mut().zip(r.vos()) {
+            *dst = VoccVo {
+                x1: q.x1,
+                y1: q.y1,
+                x2: q.x2,
+                y2: q.y2,
+                level: q.level,
+            };
+        }
+        c
+    }
+}
+
+/// The caller's cell, checked as a decoder checks a record: at most 10 VOs, fields in range,
+/// no degenerate VO.
+fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
+    let c = get(c, "cell")?;
+    if c.skipped != 0 {
+        return Ok(CellRecord::Skipped);
+    }
+    let vos = c.vos.get(..c.count as usize).ok_or_else(|| {
+        fail(
+            VOCC_ERR_ARGUMENT,
+            format!("cell: count {} is over {VOCC_MAX_VOS}", c.count),
+        )
+    })?;
+    let mut qs = [QVo {
+        x1: 0,
+        y1: 0,
+        x2: 0,
+        y2: 0,
+        level: 0,
+    }; VOCC_MAX_VOS];
+    for (k, (v, q)) in vos.iter().zip(qs.iter_mut()).enumerate() {
+        *q = QVo {
+            x1: v.x1,
+            y1: v.y1,
+            x2: v.x2,
+            y2: v.y2,
+            level: v.level,
+        };
+        if [q.x1, q.y1, q.x2, q.y2].iter().any(|&x| x >= QUANT_STEPS) || q.level >= HEIGHT_LEVELS {
+            return Err(fail(
+                VOCC_ERR_ARGUMENT,
+                format!("cell: VO {k} has a field out of range (coordinates 0..512, level 0..16)"),
+            ));
+        }
+        if q.is_degenerate() {
+            return Err(fail(
+                VOCC_ERR_ARGUMENT,
+                format!("cell: VO {k} is degenerate (one grid point)"),
+            ));
+        }
+    }
+    Ok(CellRecord::new(c.ground, &qs[..vos.len()])?)
+}
+
+fn in_grid(frame: &Frame, id: CellId) -> Result<(), Fail> {
+    let cells = frame.grid.cell_count();
+    if id as u64 >= cells {
+        return Err(FormatError::CellOutOfGrid { id, cells }.into());
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stores, frames, blobs.
+
+/// The library's version, a static NUL-terminated string such as "0.1.0".
+#[no_mangle]
+pub extern "C" fn vocc_version() -> *const c_char {
+    concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr() as *const c_char
+}
+
+/// Opens a store from the `len` bytes at `bytes`, checking all of it once (docs/FORMAT.md
+/// section 8.1). The bytes are borrowed, not copied: keep them alive and unchanged until
+/// `vocc_store_free`. On success `*out` is the store; on failure NULL.
+///
+/// # Safety
+/// `bytes` points to `len` readable bytes (or `len` is 0); `out` is NULL or writable; `err` is
+/// NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_store_open(
+    bytes: *const u8,
+    len: usize,
+    out: *mut *mut VoccStore,
+    err: *mut VoccError,
+) -> i32 {
+    clear_out(out);
+    guard(err, || {
+        let out = get_mut(out, "out")?;
+        let bytes: &'static [u8] = slice(bytes, len, "bytes")?;
+        let store = Store::parse(bytes)?;
+        *out = Box::into_raw(Box::new(VoccStore { store }));
+        Ok(())
+    })
+}
+
+/// Frees a store (NULL is ignored). Its bytes may be freed afterwards.
+///
+/// # Safety
+/// `store` is NULL or came from `vocc_store_open` and was not freed yet.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_store_free(store: *mut VoccStore) {
+    if !store.is_null() {
+        let _ = catch_unwind(|| {
+            // SAFETY: made by Box::into_raw in vocc_store_open, freed once.
+            drop(unsafe { Box::from_raw(store) })
+        });
+    }
+}
+
+/// The store's frame.
+///
+/// # Safety
+/// `store` is NULL or a live store; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_store_frame(store: *const VoccStore, out: *mut VoccFrame) -> i32 {
+    guard(ptr::null_mut(), || {
+        let s = get(store, "store")?;
+        *get_mut(out, "out")? = VoccFrame::from(s.store.frame());
+        Ok(())
+    })
+}
+
+/// Number of cells of the store's grid (nx * ny); 0 for NULL.
+///
+/// # Safety
+/// `store` is NULL or a live store.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_store_cell_count(store: *const VoccStore) -> u32 {
+    // SAFETY: NULL or a live store.
+    unsafe { store.as_ref() }.map_or(0, |s| s.store.cell_count())
+}
+
+/// The record of cell `id` of the store. Reads at most 63 index bytes and one record;
+/// allocates nothing.
+///
+/// # Safety
+/// `store` is NULL or a live store; `out` and `err` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_store_cell(
+    store: *const VoccStore,
+    id: u32,
+    out: *mut VoccCell,
+    err: *mut VoccError,
+) -> i32 {
+    guard(err, || {
+        let s = get(store, "store")?;
+        let out = get_mut(out, "out")?;
+        *out = VoccCell::from(&s.store.cell(id)?);
+        Ok(())
+    })
+}
+
+/// Decodes and checks a frame from exactly 112 bytes (the `.frame` file `vocc export --blob`
+/// writes beside a blob).
+///
+/// # Safety
+/// `bytes` points to `len` readable bytes (or `len` is 0); `out` and `err` are NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_frame_decode(
+    bytes: *const u8,
+    len: usize,
+    out: *mut VoccFrame,
+    err: *mut VoccError,
+) -> i32 {
+    guard(err, || {
+        let out = get_mut(out, "out")?;
+        let f = decode_frame(slice(bytes, len, "bytes")?)?;
+        *out = VoccFrame::from(&f);
+        Ok(())
+    })
+}
+
+/// Decodes and checks one cell's blob (docs/FORMAT.md section 6) against `frame`: `*id` is
+/// the cell's id, `*out` its record. Allocates nothing.
+///
+/// # Safety
+/// `frame` is NULL or readable; `bytes` points to `len` readable bytes (or `len` is 0); `id`,
+/// `out` and `err` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_blob_decode(
+    frame: *const VoccFrame,
+    bytes: *const u8,
+    len: usize,
+    id: *mut u32,
+    out: *mut VoccCell,
+    err: *mut VoccError,
+) -> i32 {
+    guard(err, || {
+        let f = frame_of(frame)?;
+        let id = get_mut(id, "id")?;
+        let out = get_mut(out, "out")?;
+        let (cell, rec) = decode_blob(&f, slice(bytes, len, "bytes")?)?;
+        *id = cell;
+        *out = VoccCell::from(&rec);
+        Ok(())
+    })
+}
+
+/// The cell holding local position (x, y): `VOCC_OK` and `*id`, or `VOCC_ERR_OUTSIDE_GRID`
+/// (also for NaN). For world coordinates, subtract `frame->origin` or use
+/// `vocc_cell_at_world`.
+///
+/// # Safety
+/// `frame` is NULL or readable; `id` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_cell_at(
+    frame: *const VoccFrame,
+    x: f64,
+    y: f64,
+    id: *mut u32,
+) -> i32 {
+    guard(ptr::null_mut(), || {
+        let f = frame_of(frame)?;
+        let id = get_mut(id, "id")?;
+        *id = f.grid.cell_at(x, y).ok_or_else(|| {
+            fail(
+                VOCC_ERR_OUTSIDE_GRID,
+                format!("({x}, {y}) is outside the grid"),
+            )
+        })?;
+        Ok(())
+    })
+}
+
+/// `vocc_cell_at` for a world position: (x - origin[0], y - origin[1]).
+///
+/// # Safety
+/// As `vocc_cell_at`.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_cell_at_world(
+    frame: *const VoccFrame,
+    x: f64,
+    y: f64,
+    id: *mut u32,
+) -> i32 {
+    // SAFETY: NULL or readable, as the caller guarantees.
+    let o = unsafe { frame.as_ref() }.map_or([0.0; 3], |f| f.origin);
+    // SAFETY: forwarded.
+    unsafe { vocc_cell_at(frame, x - o[0], y - o[1], id) }
+}
+
+/// The local rectangle of cell `id`: `rect[0..4] = x0, y0, x1, y1`.
+///
+/// # Safety
+/// `frame` is NULL or readable; `rect` is NULL or points to 4 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_cell_rect(frame: *const VoccFrame, id: u32, rect: *mut f64) -> i32 {
+    guard(ptr::null_mut(), || {
+        let f = frame_of(frame)?;
+        in_grid(&f, id)?;
+        let r = f
+            .grid
+            .cell_rect(id)
+            .ok_or_else(|| fail(VOCC_ERR_OUTSIDE_GRID, format!("cell {id}")))?;
+        slice_mut(rect, 4, "rect")?.copy_from_slice(&r);
+        Ok(())
+    })
+}
+
+/// The geometry of VO `k` of cell `id` with record `cell`, local frame.
+///
+/// # Safety
+/// `frame` and `cell` are NULL or readable; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_vo_geometry(
+    frame: *const VoccFrame,
+    id: u32,
+    cell: *const VoccCell,
+    k: u32,
+    out: *mut VoccVoGeom,
+) -> i32 {
+    guard(ptr::null_mut(), || {
+        let f = frame_of(frame)?;
+        in_grid(&f, id)?;
+        let rec = record_of(cell)?;
+        let q = rec.vos().get(k as usize).ok_or_else(|| {
+            fail(
+                VOCC_ERR_ARGUMENT,
+                format!("VO {k}: the cell has {}", rec.vos().len()),
+            )
+        })?;
+        let g = f
+            .dequantize(id, rec.ground(), q)
+            .ok_or_else(|| fail(VOCC_ERR_OUTSIDE_GRID, format!("cell {id}")))?;
+        *get_mut(out, "out")? = VoccVoGeom {
+            a: g.a,
+            b: g.b,
+            g: g.g,
+            h: g.h,
+        };
+        Ok(())
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Trees, queries, the PVS.
+
+/// Builds the box hierarchy over `count` object boxes, `6 * count` doubles (xmin, ymin, zmin,
+/// xmax, ymax, zmax per object; object i is boxes[6i .. 6i + 6]). With `origin` NULL the boxes
+/// are in the store's local frame; otherwise they are world coordinates and `origin` points to
+/// the frame's 3 origin doubles. The boxes are copied. A box with a NaN or infinite coordinate,
+/// or min > max, is kept in every PVS. On success `*out` is the tree; on failure NULL.
+///
+/// # Safety
+/// `boxes` points to `6 * count` readable doubles (or `count` is 0); `origin` is NULL or
+/// points to 3 readable doubles; `out` and `err` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_tree_new(
+    boxes: *const f64,
+    count: usize,
+    origin: *const f64,
+    out: *mut *mut VoccTree,
+    err: *mut VoccError,
+) -> i32 {
+    clear_out(out);
+    guard(err, || {
+        let out = get_mut(out, "out")?;
+        if count > u32::MAX as usize {
+            return Err(fail(
+                VOCC_ERR_ARGUMENT,
+                format!(
+                    "{count} boxes: at most {} (object indices are u32)",
+                    u32::MAX
+                ),
+            ));
+        }
+        let n = count
+            .checked_mul(6)
+            .ok_or_else(|| fail(VOCC_ERR_ARGUMENT, format!("{count} boxes: too many")))?;
+        let flat = slice(boxes, n, "boxes")?;
+        let mut local: Vec<[f64; 6]> = flat
+            .chunks_exact(6)
+            .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
+            .collect();
+        if !origin.is_null() {
+            let o = slice(origin, 3, "origin")?;
+            // As `BoxTree::from_world`: local = world - origin.
+            for b in &mut local {
+                for k in 0..6 {
+                    b[k] -= o[k % 3];
+                }
+            }
+        }
+        let tree = BoxTree::new(&local);
+        *out = Box::into_raw(Box::new(VoccTree { tree }));
+        Ok(())
+    })
+}
+
+/// Frees a tree (NULL is ignored).
+///
+/// # Safety
+/// `tree` is NULL or came from `vocc_tree_new` and was not freed yet.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_tree_free(tree: *mut VoccTree) {
+    if !tree.is_null() {
+        let _ = catch_unwind(|| {
+            // SAFETY: made by Box::into_raw in vocc_tree_new, freed once.
+            drop(unsafe { Box::from_raw(tree) })
+        });
+    }
+}
+
+/// Number of objects of the tree (the `count` it was built with); 0 for NULL.
+///
+/// # Safety
+/// `tree` is NULL or a live tree.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_tree_len(tree: *const VoccTree) -> usize {
+    // SAFETY: NULL or a live tree.
+    unsafe { tree.as_ref() }.map_or(0, |t| t.tree.len())
+}
+
+/// Makes the scratch memory for PVS queries over `tree` or any tree with as many objects or
+/// fewer (about 4.1 bytes per object). One thread at a time may use a query.
+///
+/// # Safety
+/// `tree` is NULL or a live tree; `out` and `err` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_query_new(
+    tree: *const VoccTree,
+    out: *mut *mut VoccQuery,
+    err: *mut VoccError,
+) -> i32 {
+    clear_out(out);
+    guard(err, || {
+        let t = get(tree, "tree")?;
+        let out = get_mut(out, "out")?;
+        let objects = t.tree.len();
+        // The culler holds a bitmap of the culled objects (one u32 per 32) before the ids.
+        let out_vec = Vec::with_capacity(objects + objects.div_ceil(32));
+        *out = Box::into_raw(Box::new(VoccQuery {
+            out: out_vec,
+            objects,
+        }));
+        Ok(())
+    })
+}
+
+/// Frees a query (NULL is ignored).
+///
+/// # Safety
+/// `query` is NULL or came from `vocc_query_new` and was not freed yet.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_query_free(query: *mut VoccQuery) {
+    if !query.is_null() {
+        let _ = catch_unwind(|| {
+            // SAFETY: made by Box::into_raw in vocc_query_new, freed once.
+            drop(unsafe { Box::from_raw(query) })
+        });
+    }
+}
+
+/// The visible ids, ascending, of the query's last `vocc_pvs` or `vocc_pvs_bitmap` that ran the
+/// culler (returned `VOCC_OK`, or `VOCC_ERR_BUFFER_TOO_SMALL` from `vocc_pvs`), without copying: `*count` ids at the returned pointer, valid until the query's
+/// next call or its free. NULL (and `*count = 0`) for a NULL query.
+///
+/// # Safety
+/// `query` is NULL or a live query; `count` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_query_ids(query: *const VoccQuery, count: *mut usize) -> *const u32 {
+    // SAFETY: NULL or a live query; NULL or writable.
+    let (q, c) = unsafe { (query.as_ref(), count.as_mut()) };
+    if let Some(c) = c {
+        *c = q.map_or(0, |q| q.out.len());
+    }
+    q.map_or(ptr::null(), |q| q.out.as_ptr())
+}
+
+/// Runs the culler for cell `id` with record `cell` into the query's scratch memory; returns
+/// the number of visible objects.
+fn run_pvs(
+    query: *mut VoccQuery,
+    tree: *const VoccTree,
+    frame: *const VoccFrame,
+    id: u32,
+    cell: *const VoccCell,
+) -> Result<(&'static mut VoccQuery, usize), Fail> {
+    let q = get_mut(query, "query")?;
+    let t = get(tree, "tree")?;
+    let f = frame_of(frame)?;
+    in_grid(&f, id)?;
+    let rec = record_of(cell)?;
+    if t.tree.len() > q.objects {
+        return Err(fail(
+            VOCC_ERR_ARGUMENT,
+            format!(
+                "the query was made for {} objects, the tree has {}",
+                q.objects,
+                t.tree.len()
+            ),
+        ));
+    }
+    pvs(&f, id, &rec, &t.tree, &mut q.out);
+    let n = q.out.len();
+    Ok((q, n))
+}
+
+/// The PVS of cell `id` (record `cell`, from `vocc_store_cell` or `vocc_blob_decode`):
+/// the ascending indices of the objects of `tree` that no VO of the cell hides. `*count` is
+/// their number. When `ids` is not NULL they are copied there; `capacity` (in ids) must be at
+/// least `*count`, which `vocc_tree_len(tree)` always is, else nothing is copied and the
+/// status is `VOCC_ERR_BUFFER_TOO_SMALL`. With `ids` NULL, read them with
+/// `vocc_query_ids`. A skipped cell or a cell without VOs keeps every object. Allocates
+/// nothing.
+///
+/// # Safety
+/// `query`, `tree`, `frame`, `cell` are NULL or live and readable (`query` used by this thread
+/// alone); `ids` is NULL or points to `capacity` writable u32; `count` and `err` are NULL or
+/// writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_pvs(
+    query: *mut VoccQuery,
+    tree: *const VoccTree,
+    frame: *const VoccFrame,
+    id: u32,
+    cell: *const VoccCell,
+    ids: *mut u32,
+    capacity: usize,
+    count: *mut usize,
+    err: *mut VoccError,
+) -> i32 {
+    guard(err, || {
+        let count = get_mut(count, "count")?;
+        let (q, n) = run_pvs(query, tree, frame, id, cell)?;
+        *count = n;
+        if ids.is_null() {
+            return Ok(());
+        }
+        if capacity < n {
+            return Err(fail(
+                VOCC_ERR_BUFFER_TOO_SMALL,
+                format!("{n} ids do not fit a buffer of {capacity}"),
+            ));
+        }
+        slice_mut(ids, n, "ids")?.copy_from_slice(&q.out);
+        Ok(())
+    })
+}
+
+/// `vocc_pvs` as a bitmap: bit `i % 8` of byte `i / 8` (least significant first) is set when
+/// object i may be visible, for the `vocc_tree_len(tree)` objects; `bitmap_len` (bytes) must
+/// be at least `(vocc_tree_len(tree) + 7) / 8`, else `VOCC_ERR_BUFFER_TOO_SMALL`. Bytes past
+/// that are left alone. `*count` is the number of bits set. Allocates nothing.
+///
+/// # Safety
+/// As `vocc_pvs`, with `bitmap` NULL or pointing to `bitmap_len` writable bytes.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_pvs_bitmap(
+    query: *mut VoccQuery,
+    tree: *const VoccTree,
+    frame: *const VoccFrame,
+    id: u32,
+    cell: *const VoccCell,
+    bitmap: *mut u8,
+    bitmap_len: usize,
+    count: *mut usize,
+    err: *mut VoccError,
+) -> i32 {
+    guard(err, || {
+        let count = get_mut(count, "count")?;
+        let objects = get(tree, "tree")?.tree.len();
+        let need = objects.div_ceil(8);
+        if bitmap_len < need {
+            return Err(fail(
+                VOCC_ERR_BUFFER_TOO_SMALL,
+                format!("{objects} objects need a bitmap of {need} bytes, {bitmap_len} given"),
+            ));
+        }
+        let bits = slice_mut(bitmap, need, "bitmap")?;
+        let (q, n) = run_pvs(query, tree, frame, id, cell)?;
+        bits.fill(0);
+        for &i in &q.out {
+            // Ids are below the tree's length, so the index is in range; `get_mut` keeps it
+            // checked anyway.
+            if let Some(b) = bits.get_mut(i as usize >> 3) {
+                *b |= 1 << (i & 7);
+            }
+        }
+        *count = n;
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests;

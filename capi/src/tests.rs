@@ -1,0 +1,858 @@
+//! The C ABI called as C would call it: results equal the Rust runtime's, every bad pointer,
+//! length, frame, cell and byte string gives its status and message without a panic, panics are
+//! caught, and the culling path allocates nothing (a counting allocator, per thread).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::ffi::CStr;
+
+use vocc::runtime::format::{encode_blob, encode_store};
+
+use super::*;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCS: Cell<u64> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc_zeroed(l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(p, l, n) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+fn allocations<T>(f: impl FnOnce() -> T) -> (T, u64) {
+    let before = ALLOCS.with(|c| c.get());
+    let r = f();
+    (r, ALLOCS.with(|c| c.get()) - before)
+}
+
+/// A 5×5 grid of 100 m cells with per-cell ground (the culler tests' frame).
+fn frame() -> Frame {
+    Frame {
+        origin: [843000.0, 6518000.0, 0.0],
+        grid: GridDescriptor {
+            min_x: 0.0,
+            min_y: 0.0,
+            cell_size: 100.0,
+            nx: 5,
+            ny: 5,
+        },
+        quantum: 0.5,
+        eye_lo: 1.5,
+        eye_hi: 2.0,
+        ground_z0: 160.0,
+        ground_step: 0.5,
+        h0: 4.0,
+        h_ratio: 1.25,
+    }
+}
+
+fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
+    QVo {
+        x1,
+        y1,
+        x2,
+        y2,
+        level,
+    }
+}
+
+/// Cell 12 (centre (250, 250)) has two long walls north and east of it; cell 3 is skipped.
+fn records() -> Vec<CellRecord> {
+    let mut cells = vec![CellRecord::EMPTY; 25];
+    // North: y = 250 + 60 from x = 150 to 350; east: x = 250 + 70 from y = 170 to 330.
+    cells[12] = CellRecord::new(0, &[q(56, 376, 456, 376, 6), q(396, 96, 396, 416, 4)]).unwrap();
+    cells[3] = CellRecord::Skipped;
+    cells[7] = CellRecord::new(2, &[q(10, 400, 500, 400, 15)]).unwrap();
+    cells
+}
+
+/// A deterministic scatter of boxes over the grid, some behind the walls, a few invalid.
+fn boxes() -> Vec<[f64; 6]> {
+    let mut s: u64 = 12345;
+    let mut next = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut v = Vec::new();
+    for _ in 0..3000 {
+        let (x, y) = (next() * 500.0, next() * 500.0);
+        let (w, d, h) = (1.0 + next() * 20.0, 1.0 + next() * 20.0, next() * 30.0);
+        v.push([x, y, 160.0, x + w, y + d, 160.0 + h]);
+    }
+    v.push([f64::NAN, 0.0, 0.0, 1.0, 1.0, 1.0]);
+    v.push([5.0, 5.0, 5.0, 1.0, 1.0, 1.0]);
+    v
+}
+
+fn msg(e: &VoccError) -> String {
+    // SAFETY: report() always NUL-terminates within the buffer.
+    unsafe { CStr::from_ptr(e.message.as_ptr()) }
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+fn blank_error() -> VoccError {
+    VoccError {
+        code: -1,
+        message: [b'x' as c_char; VOCC_MESSAGE_LEN],
+    }
+}
+
+struct Fixture {
+    bytes: Vec<u8>,
+    store: *mut VoccStore,
+    tree: *mut VoccTree,
+    query: *mut VoccQuery,
+    frame: VoccFrame,
+    boxes: Vec<[f64; 6]>,
+}
+
+impl Fixture {
+    fn new() -> Fixture {
+        let bytes = encode_store(&frame(), &records()).unwrap();
+        let boxes = boxes();
+        let mut f = Fixture {
+            bytes,
+            store: ptr::null_mut(),
+            tree: ptr::null_mut(),
+            query: ptr::null_mut(),
+            frame: VoccFrame::from(&frame()),
+            boxes,
+        };
+        let mut e = blank_error();
+        unsafe {
+            assert_eq!(
+                vocc_store_open(f.bytes.as_ptr(), f.bytes.len(), &mut f.store, &mut e),
+                VOCC_OK
+            );
+            assert_eq!((e.code, msg(&e).as_str()), (0, ""));
+            assert_eq!(vocc_store_frame(f.store, &mut f.frame), VOCC_OK);
+            assert_eq!(
+                vocc_tree_new(
+                    f.boxes.as_ptr().cast(),
+                    f.boxes.len(),
+                    ptr::null(),
+                    &mut f.tree,
+                    &mut e
+                ),
+                VOCC_OK
+            );
+            assert_eq!(vocc_query_new(f.tree, &mut f.query, &mut e), VOCC_OK);
+        }
+        f
+    }
+
+    fn cell(&self, id: u32) -> VoccCell {
+        let mut c = VoccCell::default();
+        assert_eq!(
+            unsafe { vocc_store_cell(self.store, id, &mut c, ptr::null_mut()) },
+            VOCC_OK
+        );
+        c
+    }
+}
+
+impl Drop for Fixture {
+    fn drop(&mut self) {
+        unsafe {
+            vocc_query_free(self.query);
+            vocc_tree_free(self.tree);
+            vocc_store_free(self.store);
+        }
+    }
+}
+
+#[test]
+fn pvs_equals_the_rust_culler_for_every_cell_as_ids_and_bitmap() {
+    let fx = Fixture::new();
+    let f = frame();
+    assert_eq!(fx.frame, VoccFrame::from(&f));
+    assert_eq!(unsafe { vocc_store_cell_count(fx.store) }, 25);
+    assert_eq!(unsafe { vocc_tree_len(fx.tree) }, fx.boxes.len());
+    let tree = BoxTree::new(&fx.boxes);
+    let recs = records();
+    let mut ids = vec![0u32; fx.boxes.len()];
+    let mut bits = vec![0u8; fx.boxes.len().div_ceil(8)];
+    let mut some_culled = false;
+    for id in 0..25u32 {
+        let cell = fx.cell(id);
+        assert_eq!(cell, VoccCell::from(&recs[id as usize]), "cell {id}");
+        let mut want = Vec::new();
+        pvs(&f, id, &recs[id as usize], &tree, &mut want);
+        some_culled |= want.len() < fx.boxes.len();
+        let mut n = 0;
+        let mut e = blank_error();
+        let st = unsafe {
+            vocc_pvs(
+                fx.query,
+                fx.tree,
+                &fx.frame,
+                id,
+                &cell,
+                ids.as_mut_ptr(),
+                ids.len(),
+                &mut n,
+                &mut e,
+            )
+        };
+        assert_eq!((st, e.code), (VOCC_OK, VOCC_OK));
+        assert_eq!(&ids[..n], &want[..], "cell {id}");
+        let mut m = 0;
+        let (p, got) = unsafe {
+            let p = vocc_query_ids(fx.query, &mut m);
+            (p, std::slice::from_raw_parts(p, m))
+        };
+        assert!(!p.is_null());
+        assert_eq!(got, &want[..]);
+        let st = unsafe {
+            vocc_pvs_bitmap(
+                fx.query,
+                fx.tree,
+                &fx.frame,
+                id,
+                &cell,
+                bits.as_mut_ptr(),
+                bits.len(),
+                &mut m,
+                ptr::null_mut(),
+            )
+        };
+        assert_eq!(st, VOCC_OK);
+        assert_eq!(m, want.len());
+        let from_bits: Vec<u32> = (0..fx.boxes.len() as u32)
+            .filter(|&i| bits[i as usize / 8] >> (i % 8) & 1 == 1)
+            .collect();
+        assert_eq!(from_bits, want, "cell {id}");
+    }
+    assert!(some_culled, "the fixture must cull something");
+    // The two invalid boxes are in every PVS.
+    let cell = fx.cell(12);
+    let mut n = 0;
+    unsafe {
+        vocc_pvs(
+            fx.query,
+            fx.tree,
+            &fx.frame,
+            12,
+            &cell,
+            ids.as_mut_ptr(),
+            ids.len(),
+            &mut n,
+            ptr::null_mut(),
+        );
+    }
+    assert!(ids[..n].ends_with(&[3000, 3001]));
+}
+
+#[test]
+fn world_boxes_with_the_origin_give_the_local_result() {
+    let fx = Fixture::new();
+    let o = frame().origin;
+    let world: Vec<[f64; 6]> = fx
+        .boxes
+        .iter()
+        .map(|b| {
+            [
+                b[0] + o[0],
+                b[1] + o[1],
+                b[2] + o[2],
+                b[3] + o[0],
+                b[4] + o[1],
+                b[5] + o[2],
+            ]
+        })
+        .collect();
+    let mut t = ptr::null_mut();
+    let mut e = blank_error();
+    let rust = BoxTree::from_world(&world, o);
+    assert_eq!(
+        unsafe {
+            vocc_tree_new(
+                world.as_ptr().cast(),
+                world.len(),
+                o.as_ptr(),
+                &mut t,
+                &mut e,
+            )
+        },
+        VOCC_OK
+    );
+    let cell = fx.cell(12);
+    let mut want = Vec::new();
+    pvs(&frame(), 12, &records()[12], &rust, &mut want);
+    let mut n = 0;
+    let mut ids = vec![0u32; world.len()];
+    let st = unsafe {
+        vocc_pvs(
+            fx.query,
+            t,
+            &fx.frame,
+            12,
+            &cell,
+            ids.as_mut_ptr(),
+            ids.len(),
+            &mut n,
+            &mut e,
+        )
+    };
+    assert_eq!(st, VOCC_OK);
+    assert_eq!(&ids[..n], &want[..]);
+    assert!(n < world.len());
+    unsafe { vocc_tree_free(t) };
+}
+
+#[test]
+fn cell_at_and_rect_follow_the_grid() {
+    let fx = Fixture::new();
+    let mut id = 99;
+    unsafe {
+        assert_eq!(vocc_cell_at(&fx.frame, 250.0, 250.0, &mut id), VOCC_OK);
+        assert_eq!(id, 12);
+        assert_eq!(
+            vocc_cell_at_world(&fx.frame, 843000.0 + 499.9, 6518000.0 + 0.5, &mut id),
+            VOCC_OK
+        );
+        assert_eq!(id, 4);
+        id = 99;
+        assert_eq!(
+            vocc_cell_at(&fx.frame, 500.0, 10.0, &mut id),
+            VOCC_ERR_OUTSIDE_GRID
+        );
+        assert_eq!(
+            vocc_cell_at(&fx.frame, f64::NAN, 10.0, &mut id),
+            VOCC_ERR_OUTSIDE_GRID
+        );
+        assert_eq!(id, 99, "no output on failure");
+        let mut r = [0.0; 4];
+        assert_eq!(vocc_cell_rect(&fx.frame, 7, r.as_mut_ptr()), VOCC_OK);
+        assert_eq!(r, [200.0, 100.0, 300.0, 200.0]);
+        assert_eq!(
+            vocc_cell_rect(&fx.frame, 25, r.as_mut_ptr()),
+            VOCC_ERR_OUTSIDE_GRID
+        );
+        let cell = fx.cell(12);
+        let mut g = VoccVoGeom::default();
+        assert_eq!(vocc_vo_geometry(&fx.frame, 12, &cell, 0, &mut g), VOCC_OK);
+        let want = frame().dequantize(12, 0, &records()[12].vos()[0]).unwrap();
+        assert_eq!((g.a, g.b, g.g, g.h), (want.a, want.b, want.g, want.h));
+        assert_eq!(
+            vocc_vo_geometry(&fx.frame, 12, &cell, 2, &mut g),
+            VOCC_ERR_ARGUMENT
+        );
+        let s = CStr::from_ptr(vocc_version()).to_str().unwrap();
+        assert_eq!(s, env!("CARGO_PKG_VERSION"));
+    }
+}
+
+#[test]
+fn blobs_and_frames_decode_like_the_store() {
+    let fx = Fixture::new();
+    let f = frame();
+    let frame_bytes = vocc::runtime::format::encode_frame(&f);
+    let mut fr = VoccFrame::from(&Frame {
+        quantum: 3.0,
+        ..frame()
+    });
+    let mut e = blank_error();
+    unsafe {
+        assert_eq!(
+            vocc_frame_decode(frame_bytes.as_ptr(), frame_bytes.len(), &mut fr, &mut e),
+            VOCC_OK
+        );
+        assert_eq!(fr, fx.frame);
+        assert_eq!(
+            vocc_frame_decode(frame_bytes.as_ptr(), 111, &mut fr, &mut e),
+            VOCC_ERR_FORMAT
+        );
+        assert_eq!(msg(&e), "truncated: 112 bytes needed, 111 given");
+    }
+    for (id, rec) in records().iter().enumerate() {
+        let blob = encode_blob(&f, id as u32, rec).unwrap();
+        let (mut got_id, mut cell) = (0u32, VoccCell::default());
+        let st = unsafe {
+            vocc_blob_decode(
+                &fr,
+                blob.as_ptr(),
+                blob.len(),
+                &mut got_id,
+                &mut cell,
+                &mut e,
+            )
+        };
+        assert_eq!(st, VOCC_OK);
+        assert_eq!((got_id, cell), (id as u32, fx.cell(id as u32)));
+    }
+    let mut blob = encode_blob(&f, 12, &records()[12]).unwrap();
+    blob[12] ^= 1;
+    let (mut got_id, mut cell) = (0u32, VoccCell::default());
+    let st = unsafe {
+        vocc_blob_decode(
+            &fr,
+            blob.as_ptr(),
+            blob.len(),
+            &mut got_id,
+            &mut cell,
+            &mut e,
+        )
+    };
+    assert_eq!((st, e.code), (VOCC_ERR_CHECKSUM, VOCC_ERR_CHECKSUM));
+    assert!(msg(&e).starts_with("checksum mismatch"), "{}", msg(&e));
+}
+
+#[test]
+fn bad_stores_are_refused_with_the_rule_and_a_null_store() {
+    let good = encode_store(&frame(), &records()).unwrap();
+    let mut e = blank_error();
+    let mut s: *mut VoccStore = ptr::NonNull::dangling().as_ptr();
+    let cases: Vec<(Vec<u8>, i32, &str)> = vec![
+        (
+            good[..100].to_vec(),
+            VOCC_ERR_FORMAT,
+            "truncated: 136 bytes needed, 100 given",
+        ),
+        (
+            [&b"not a store"[..], &good[11..]].concat(),
+            VOCC_ERR_FORMAT,
+            "bad magic number: not a vocc store or blob",
+        ),
+        (
+            {
+                let mut b = good.clone();
+                b[8] = 2;
+                b
+            },
+            VOCC_ERR_VERSION,
+            "unsupported major version 2 (this reader implements 1)",
+        ),
+        (
+            {
+                let mut b = good.clone();
+                let n = b.len();
+                b[n - 1] ^= 0x40;
+                b
+            },
+            VOCC_ERR_CHECKSUM,
+            "checksum mismatch",
+        ),
+    ];
+    for (bytes, code, text) in cases {
+        let st = unsafe { vocc_store_open(bytes.as_ptr(), bytes.len(), &mut s, &mut e) };
+        assert_eq!((st, e.code), (code, code), "{text}");
+        assert!(msg(&e).starts_with(text), "{} vs {text}", msg(&e));
+        assert!(s.is_null(), "the out-pointer is NULL on failure");
+    }
+    // A NULL byte pointer with a length, and an empty store.
+    unsafe {
+        assert_eq!(
+            vocc_store_open(ptr::null(), 10, &mut s, &mut e),
+            VOCC_ERR_NULL
+        );
+        assert_eq!(msg(&e), "bytes is NULL");
+        assert_eq!(
+            vocc_store_open(ptr::null(), 0, &mut s, &mut e),
+            VOCC_ERR_FORMAT
+        );
+        assert_eq!(
+            vocc_store_open(good.as_ptr(), good.len(), ptr::null_mut(), &mut e),
+            VOCC_ERR_NULL
+        );
+        assert_eq!(
+            vocc_store_open(good.as_ptr(), usize::MAX, &mut s, &mut e),
+            VOCC_ERR_ARGUMENT
+        );
+    }
+}
+
+#[test]
+fn null_pointers_and_bad_arguments_give_statuses_not_crashes() {
+    let fx = Fixture::new();
+    let cell = fx.cell(12);
+    let mut n = 0usize;
+    let mut ids = vec![0u32; fx.boxes.len()];
+    let mut e = blank_error();
+    unsafe {
+        assert_eq!(
+            vocc_store_frame(ptr::null(), ptr::null_mut()),
+            VOCC_ERR_NULL
+        );
+        assert_eq!(vocc_store_frame(fx.store, ptr::null_mut()), VOCC_ERR_NULL);
+        assert_eq!(vocc_store_cell_count(ptr::null()), 0);
+        assert_eq!(vocc_tree_len(ptr::null()), 0);
+        assert_eq!(
+            vocc_store_cell(fx.store, 0, ptr::null_mut(), &mut e),
+            VOCC_ERR_NULL
+        );
+        let mut c = VoccCell::default();
+        assert_eq!(
+            vocc_store_cell(fx.store, 25, &mut c, &mut e),
+            VOCC_ERR_OUTSIDE_GRID
+        );
+        assert_eq!(msg(&e), "cell 25 is outside the grid of 25 cells");
+        assert_eq!(vocc_cell_at(ptr::null(), 1.0, 1.0, &mut 0), VOCC_ERR_NULL);
+        assert_eq!(
+            vocc_cell_at_world(ptr::null(), 1.0, 1.0, &mut 0),
+            VOCC_ERR_NULL
+        );
+        assert_eq!(
+            vocc_cell_at(&fx.frame, 1.0, 1.0, ptr::null_mut()),
+            VOCC_ERR_NULL
+        );
+        assert_eq!(vocc_cell_rect(&fx.frame, 0, ptr::null_mut()), VOCC_ERR_NULL);
+        let mut count = 7;
+        assert!(vocc_query_ids(ptr::null(), &mut count).is_null());
+        assert_eq!(count, 0);
+        vocc_store_free(ptr::null_mut());
+        vocc_tree_free(ptr::null_mut());
+        vocc_query_free(ptr::null_mut());
+
+        let call = |q, t, f: *const VoccFrame, id, c: *const VoccCell, ids: *mut u32, cap, n| {
+            let mut e = blank_error();
+            let st = vocc_pvs(q, t, f, id, c, ids, cap, n, &mut e);
+            assert_eq!(st, e.code);
+            (st, msg(&e))
+        };
+        let p = ids.as_mut_ptr();
+        let cap = ids.len();
+        assert_eq!(
+            call(
+                ptr::null_mut(),
+                fx.tree,
+                &fx.frame,
+                12,
+                &cell,
+                p,
+                cap,
+                &mut n
+            )
+            .0,
+            VOCC_ERR_NULL
+        );
+        assert_eq!(
+            call(
+                fx.query,
+                ptr::null_mut(),
+                &fx.frame,
+                12,
+                &cell,
+                p,
+                cap,
+                &mut n
+            )
+            .0,
+            VOCC_ERR_NULL
+        );
+        assert_eq!(
+            call(fx.query, fx.tree, ptr::null(), 12, &cell, p, cap, &mut n).0,
+            VOCC_ERR_NULL
+        );
+        assert_eq!(
+            call(
+                fx.query,
+                fx.tree,
+                &fx.frame,
+                12,
+                ptr::null(),
+                p,
+                cap,
+                &mut n
+            )
+            .0,
+            VOCC_ERR_NULL
+        );
+        assert_eq!(
+            call(
+                fx.query,
+                fx.tree,
+                &fx.frame,
+                12,
+                &cell,
+                p,
+                cap,
+                ptr::null_mut()
+            )
+            .0,
+            VOCC_ERR_NULL
+        );
+        assert_eq!(
+            call(fx.query, fx.tree, &fx.frame, 25, &cell, p, cap, &mut n),
+            (
+                VOCC_ERR_OUTSIDE_GRID,
+                "cell 25 is outside the grid of 25 cells".into()
+            )
+        );
+        // Too small a buffer: the count says what is needed, nothing is written.
+        ids.fill(u32::MAX);
+        let (st, m) = call(fx.query, fx.tree, &fx.frame, 12, &cell, p, 10, &mut n);
+        assert_eq!(st, VOCC_ERR_BUFFER_TOO_SMALL, "{m}");
+        assert!(n > 10 && n < fx.boxes.len());
+        assert!(ids.iter().all(|&i| i == u32::MAX));
+        let mut bits = [0u8; 4];
+        assert_eq!(
+            vocc_pvs_bitmap(
+                fx.query,
+                fx.tree,
+                &fx.frame,
+                12,
+                &cell,
+                bits.as_mut_ptr(),
+                4,
+                &mut n,
+                &mut e
+            ),
+            VOCC_ERR_BUFFER_TOO_SMALL
+        );
+        assert_eq!(msg(&e), "3002 objects need a bitmap of 376 bytes, 4 given");
+
+        // Cells and frames the caller made up are checked as a decoder would.
+        for (bad, text) in [
+            (VoccCell { count: 11, ..cell }, "cell: count 11 is over 10"),
+            (
+                VoccCell {
+                    vos: [VoccVo {
+                        x1: 512,
+                        ..cell.vos[0]
+                    }; 10],
+                    ..cell
+                },
+                "cell: VO 0 has a field out of range (coordinates 0..512, level 0..16)",
+            ),
+            (
+                VoccCell {
+                    vos: [VoccVo {
+                        level: 16,
+                        ..cell.vos[0]
+                    }; 10],
+                    ..cell
+                },
+                "cell: VO 0 has a field out of range (coordinates 0..512, level 0..16)",
+            ),
+            (
+                {
+                    let mut c = cell;
+                    c.vos[1] = VoccVo {
+                        x1: 3,
+                        y1: 4,
+                        x2: 3,
+                        y2: 4,
+                        level: 1,
+                    };
+                    c
+                },
+                "cell: VO 1 is degenerate (one grid point)",
+            ),
+        ] {
+            assert_eq!(
+                call(fx.query, fx.tree, &fx.frame, 12, &bad, p, cap, &mut n),
+                (VOCC_ERR_ARGUMENT, text.to_string())
+            );
+        }
+        for (bad, text) in [
+            (
+                VoccFrame {
+                    quantum: 0.3,
+                    ..fx.frame
+                },
+                "bad frame: rule F5: quantum must be a power of two in [2^-10, 2^10]",
+            ),
+            (
+                VoccFrame {
+                    cell_size: f64::NAN,
+                    ..fx.frame
+                },
+                "bad frame: rule F1: every float must be finite",
+            ),
+            (
+                VoccFrame { nx: 0, ..fx.frame },
+                "bad frame: rule F3: nx and ny must be >= 1",
+            ),
+            (
+                VoccFrame {
+                    nx: u32::MAX,
+                    ny: u32::MAX,
+                    ..fx.frame
+                },
+                "bad frame: rule F4: nx * ny must be <= 2^31",
+            ),
+        ] {
+            assert_eq!(
+                call(fx.query, fx.tree, &bad, 12, &cell, p, cap, &mut n),
+                (VOCC_ERR_FRAME, text.to_string())
+            );
+            assert_eq!(vocc_cell_at(&bad, 1.0, 1.0, &mut 0), VOCC_ERR_FRAME);
+        }
+
+        // A query made for a smaller tree is refused, not overrun.
+        let mut small_tree = ptr::null_mut();
+        let mut small_q = ptr::null_mut();
+        assert_eq!(
+            vocc_tree_new(
+                fx.boxes.as_ptr().cast(),
+                10,
+                ptr::null(),
+                &mut small_tree,
+                &mut e
+            ),
+            VOCC_OK
+        );
+        assert_eq!(vocc_query_new(small_tree, &mut small_q, &mut e), VOCC_OK);
+        let (st, m) = call(small_q, fx.tree, &fx.frame, 12, &cell, p, cap, &mut n);
+        assert_eq!(
+            (st, m.as_str()),
+            (
+                VOCC_ERR_ARGUMENT,
+                "the query was made for 10 objects, the tree has 3002"
+            )
+        );
+        assert_eq!(
+            call(fx.query, small_tree, &fx.frame, 12, &cell, p, cap, &mut n).0,
+            VOCC_OK
+        );
+        vocc_query_free(small_q);
+        vocc_tree_free(small_tree);
+
+        // Trees: NULL boxes with a count, too many boxes, an empty tree.
+        let mut t = ptr::null_mut();
+        assert_eq!(
+            vocc_tree_new(ptr::null(), 5, ptr::null(), &mut t, &mut e),
+            VOCC_ERR_NULL
+        );
+        assert!(t.is_null());
+        assert_eq!(
+            vocc_tree_new(
+                fx.boxes.as_ptr().cast(),
+                usize::MAX / 2,
+                ptr::null(),
+                &mut t,
+                &mut e
+            ),
+            VOCC_ERR_ARGUMENT
+        );
+        assert_eq!(
+            vocc_tree_new(ptr::null(), 0, ptr::null(), &mut t, &mut e),
+            VOCC_OK
+        );
+        let mut q = ptr::null_mut();
+        assert_eq!(vocc_query_new(t, &mut q, &mut e), VOCC_OK);
+        let (st, _) = call(q, t, &fx.frame, 12, &cell, ptr::null_mut(), 0, &mut n);
+        assert_eq!((st, n), (VOCC_OK, 0));
+        vocc_query_free(q);
+        vocc_tree_free(t);
+    }
+}
+
+#[test]
+fn the_culling_path_allocates_nothing() {
+    let fx = Fixture::new();
+    let f = frame();
+    let blobs: Vec<Vec<u8>> = records()
+        .iter()
+        .enumerate()
+        .map(|(i, r)| encode_blob(&f, i as u32, r).unwrap())
+        .collect();
+    let mut ids = vec![0u32; fx.boxes.len()];
+    let mut bits = vec![0u8; fx.boxes.len().div_ceil(8)];
+    let (total, n) = allocations(|| {
+        let mut total = 0;
+        for pass in 0..3 {
+            for id in 0..25u32 {
+                let mut cell = VoccCell::default();
+                let mut got = 0;
+                let mut count = 0;
+                let mut pos = 0;
+                unsafe {
+                    let r = fx.frame.min_x + (id % 5) as f64 * 100.0 + 50.0;
+                    let s = fx.frame.min_y + (id / 5) as f64 * 100.0 + 50.0;
+                    assert_eq!(vocc_cell_at(&fx.frame, r, s, &mut pos), VOCC_OK);
+                    let b = &blobs[id as usize];
+                    assert_eq!(
+                        vocc_blob_decode(
+                            &fx.frame,
+                            b.as_ptr(),
+                            b.len(),
+                            &mut got,
+                            &mut cell,
+                            ptr::null_mut()
+                        ),
+                        VOCC_OK
+                    );
+                    assert_eq!(
+                        vocc_store_cell(fx.store, pos, &mut cell, ptr::null_mut()),
+                        VOCC_OK
+                    );
+                    let st = if pass == 1 {
+                        vocc_pvs_bitmap(
+                            fx.query,
+                            fx.tree,
+                            &fx.frame,
+                            id,
+                            &cell,
+                            bits.as_mut_ptr(),
+                            bits.len(),
+                            &mut count,
+                            ptr::null_mut(),
+                        )
+                    } else {
+                        vocc_pvs(
+                            fx.query,
+                            fx.tree,
+                            &fx.frame,
+                            id,
+                            &cell,
+                            ids.as_mut_ptr(),
+                            ids.len(),
+                            &mut count,
+                            ptr::null_mut(),
+                        )
+                    };
+                    assert_eq!(st, VOCC_OK);
+                }
+                total += count;
+            }
+        }
+        total
+    });
+    assert!(total > 0);
+    assert_eq!(n, 0, "the culling path allocated {n} times");
+}
+
+#[test]
+fn panics_are_caught_at_the_boundary() {
+    let mut e = blank_error();
+    let prev = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let st = guard(&mut e, || panic!("boom"));
+    std::panic::set_hook(prev);
+    assert_eq!((st, e.code), (VOCC_ERR_PANIC, VOCC_ERR_PANIC));
+    assert_eq!(msg(&e), "internal error: boom");
+}
+
+#[test]
+fn long_messages_are_cut_at_a_character_boundary() {
+    let mut e = blank_error();
+    let long = "é".repeat(200); // 400 bytes
+    report(&mut e, VOCC_ERR_FORMAT, &long);
+    let m = msg(&e);
+    assert_eq!(m.len(), 254, "255 would split a character");
+    assert!(long.starts_with(&m));
+}

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# make test's check of the C ABI: builds libvocc (capi/, the runtime without the geometry stack)
+# and the C example with the system C compiler, bakes the bundled Lyon store, and checks that the
+# example's PVS equals `vocc pvs --json` byte for byte for a spread of cells (at least one of
+# which must cull something), and that a damaged store is refused with the library's message.
+# Builds with cargo's test profile, so it reuses what `cargo test` compiled.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+CARGO=${CARGO:-cargo}
+CC=${CC:-cc}
+out=target/tmp/c-example
+mkdir -p "$out"
+
+$CARGO build --locked --profile test -p vocc-capi
+$CARGO build --locked --profile test --bin vocc --example boxes
+lib=target/debug
+"$CC" -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Icapi/include examples/c/pvs.c \
+  "$lib/libvocc.a" -lm -lpthread -ldl -o "$out/pvs"
+"$CC" -std=c99 -O2 -Wall -Wextra -Werror -Icapi/include examples/c/bench.c \
+  "$lib/libvocc.a" -lm -lpthread -ldl -o "$out/bench"
+# The same program against the shared library.
+"$CC" -std=c99 -O2 -Wall -Wextra -Werror -Icapi/include examples/c/pvs.c \
+  -L"$lib" -lvocc -Wl,-rpath,"$PWD/$lib" -o "$out/pvs-shared"
+
+scene=data/lyon1/buildings_lyon1.geojson
+"$lib/vocc" bake "$scene" --height-attr HAUTEUR -o "$out/lyon.vocc" 2>/dev/null
+"$lib/examples/boxes" "$scene" --height-attr HAUTEUR -o "$out/lyon.boxes"
+
+culled=0
+compared=0
+for cell in 0 23 57 100 113 131 150 171 200 227 "--at 1842000,5176050"; do
+  case $cell in --at*) sel=$cell ;; *) sel="--cell $cell" ;; esac
+  # shellcheck disable=SC2086
+  "$lib/vocc" pvs "$out/lyon.vocc" "$scene" --height-attr HAUTEUR $sel --json >"$out/want.json"
+  # shellcheck disable=SC2086
+  "$out/pvs" "$out/lyon.vocc" "$out/lyon.boxes" $sel --json >"$out/got.json"
+  # shellcheck disable=SC2086
+  "$out/pvs-shared" "$out/lyon.vocc" "$out/lyon.boxes" $sel --json >"$out/got-shared.json"
+  if ! cmp -s "$out/want.json" "$out/got.json" || ! cmp -s "$out/want.json" "$out/got-shared.json"; then
+    echo "C example: the PVS of $sel differs from vocc pvs (see $out/want.json, got.json)" >&2
+    exit 1
+  fi
+  compared=$((compared + 1))
+  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if len(d["pvs"]) < d["objects"] else 1)' \
+    "$out/got.json" && culled=$((culled + 1))
+done
+if [ "$culled" -eq 0 ]; then
+  echo "C example: none of the $compared cells culled anything; the comparison proves nothing" >&2
+  exit 1
+fi
+"$out/pvs" "$out/lyon.vocc" "$out/lyon.boxes" --at 1842000,5176050
+
+# A damaged store is refused with the library's message, and the example exits 1.
+head -c 500 "$out/lyon.vocc" >"$out/damaged.vocc"
+if "$out/pvs" "$out/damaged.vocc" "$out/lyon.boxes" --cell 0 2>"$out/err.txt"; then
+  echo "C example: a truncated store was accepted" >&2
+  exit 1
+fi
+grep -q "truncated: .* bytes needed, 500 given" "$out/err.txt" || {
+  echo "C example: unexpected message for a truncated store: $(cat "$out/err.txt")" >&2
+  exit 1
+}
+echo "C example: $compared passed, 0 failed ($culled of them cull objects; static and shared library)"
