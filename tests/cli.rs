@@ -461,16 +461,14 @@ fn boxes_geojson_attr(attr: &str, b: &[(f64, f64, f64, f64)]) -> String {
     )
 }
 
-/// A block of `n` x `n` buildings of 20 m, 30 m apart, 25 m tall, from world (x0, y0).
+/// A block of `n` x `n` buildings of 30 m, 40 m apart (10 m streets), 20 to 29 m tall, from
+/// world (x0, y0).
 fn block(x0: f64, y0: f64, n: usize) -> Vec<(f64, f64, f64, f64)> {
     (0..n * n)
         .map(|k| {
-            (
-                x0 + 30.0 * (k % n) as f64,
-                y0 + 30.0 * (k / n) as f64,
-                20.0,
-                25.0,
-            )
+            let (i, j) = (k % n, k / n);
+            let h = 20.0 + ((7 * i + 3 * j) % 10) as f64;
+            (x0 + 40.0 * i as f64, y0 + 40.0 * j as f64, 30.0, h)
         })
         .collect()
 }
@@ -596,11 +594,11 @@ fn run(args: &[&str]) -> (Option<i32>, String) {
     )
 }
 
-/// A tiny street of 3 x 3 buildings at Lyon's coordinates, baked on 50 m cells into
-/// `dir/tiny.vocc` (in well under a second).
+/// A tiny city of 8 x 8 buildings at Lyon's coordinates, baked on 50 m cells (7 x 7) into
+/// `dir/tiny.vocc` in about 0.2 s; it stores about 80 VOs.
 fn tiny_scene_and_store(dir: &std::path::Path) -> (String, String) {
     let scene = dir.join("tiny.geojson");
-    std::fs::write(&scene, boxes_geojson(&block(1_842_000.0, 5_176_000.0, 3))).unwrap();
+    std::fs::write(&scene, boxes_geojson(&block(1_842_000.0, 5_176_000.0, 8))).unwrap();
     let store = dir.join("tiny.vocc");
     let (s, t) = (
         scene.to_str().unwrap().to_string(),
@@ -629,7 +627,7 @@ fn tiny_scene_and_store(dir: &std::path::Path) -> (String, String) {
 fn output_equal_to_an_input_is_refused_and_the_input_is_not_destroyed() {
     let dir = common::temp_dir("cli-output-is-input");
     let victim = dir.join("victim.geojson");
-    let text = boxes_geojson_attr("HAUTEUR", &block(1_842_000.0, 5_176_000.0, 3));
+    let text = boxes_geojson_attr("HAUTEUR", &block(1_842_000.0, 5_176_000.0, 8));
     std::fs::write(&victim, &text).unwrap();
     let v = victim.to_str().unwrap();
     let (_, store) = tiny_scene_and_store(&dir);
@@ -728,7 +726,7 @@ fn bake_into_a_missing_directory_fails_before_any_work() {
         ],
         vec![
             "export",
-            &dir.join("tiny.vocc").to_str().unwrap().to_string(),
+            dir.join("tiny.vocc").to_str().unwrap(),
             "--cell",
             "0",
             "--obj",
@@ -910,6 +908,10 @@ fn a_reuse_bake_with_0_cells_rebaked_does_not_print_vos_per_baked_cell_over_one_
     assert!(!err.contains("per baked cell,"), "{err}");
     let v: serde_json::Value =
         serde_json::from_slice(&vocc(&["inspect", &store, "--json"]).stdout).unwrap();
+    assert!(
+        v["vos"].as_u64().unwrap() > 10,
+        "the tiny city stores VOs: {v}"
+    );
     let want = format!(
         "VOs: {} in {} cells ({:.2} per cell",
         v["vos"],
@@ -917,4 +919,251 @@ fn a_reuse_bake_with_0_cells_rebaked_does_not_print_vos_per_baked_cell_over_one_
         v["vos"].as_f64().unwrap() / v["cells"].as_f64().unwrap()
     );
     assert!(err.contains(&want), "{want:?} not in {err}");
+}
+
+/// Issue 13, defect 8: `vocc inspect S --json | head -1` printed "error: Broken pipe" and exited
+/// 1. A closed output pipe ends the run quietly with status 0, as Unix tools do.
+#[test]
+fn inspect_json_into_a_closed_pipe_exits_quietly_not_with_error_broken_pipe() {
+    let dir = common::temp_dir("cli-broken-pipe");
+    let (_, store) = tiny_scene_and_store(&dir);
+    // The reader (`true`) is gone before vocc writes: every write meets a closed pipe.
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(r#"{ sleep 0.3; "$0" inspect "$1" --json; echo "rc=$?" >&2; } | true"#)
+        .arg(env!("CARGO_BIN_EXE_vocc"))
+        .arg(&store)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("rc=0"), "{err}");
+    assert!(!err.contains("error"), "{err}");
+}
+
+/// Issue 13, defect 9: `eval --report DIR` promised plots and wrote only eval.md. It writes the
+/// two plots eval.md shows. And (friction) `eval` names cells by id, shows its progress in a log,
+/// and a false cull's exit status (3) is not a usage error's (2).
+#[test]
+fn eval_report_dir_writes_the_plots_it_promises_and_cells_are_named_by_id() {
+    let dir = common::temp_dir("cli-eval-report");
+    let (scene, store) = tiny_scene_and_store(&dir);
+    let rep = dir.join("report");
+    let out = Command::new(env!("CARGO_BIN_EXE_vocc"))
+        .args([
+            "eval",
+            &store,
+            &scene,
+            "--height-attr",
+            "height",
+            "--cell",
+            "10,3,24",
+            "--json",
+            "--report",
+            rep.to_str().unwrap(),
+        ])
+        .env("VOCC_PROGRESS_SECONDS", "0")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let ids: Vec<u64> = v["cells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["cell"].as_u64().unwrap())
+        .collect();
+    assert_eq!(ids, [3, 10, 24]);
+    let md = std::fs::read_to_string(rep.join("eval.md")).unwrap();
+    for plot in ["vos.svg", "map.svg"] {
+        assert!(
+            md.contains(&format!("]({plot})")),
+            "eval.md does not show {plot}"
+        );
+        let svg = std::fs::read_to_string(rep.join(plot)).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("</svg>"), "{plot}");
+    }
+    // Progress in a log: count, rate and time left, not a spinner.
+    assert!(err.contains("ground truth: 3 cells"), "{err}");
+    assert!(err.contains("cells/s") && err.contains("left"), "{err}");
+    assert!(err.contains("ground truth: 3/3 cells done"), "{err}");
+    let (rc, err) = run(&[
+        "eval",
+        &store,
+        &scene,
+        "--height-attr",
+        "height",
+        "--cell",
+        "49",
+    ]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(
+        err.contains("cell 49 is outside the grid (cells 0..49)"),
+        "{err}"
+    );
+    let help = String::from_utf8_lossy(&vocc(&["--help"]).stdout).into_owned();
+    assert!(help.contains("3  vocc eval: a false cull"), "{help}");
+}
+
+/// Issue 13 (friction): `inspect --json` did nothing with `--cell`, and there was no per-cell
+/// listing (finding a store's busiest cells took thousands of calls). `--cell` prints text or
+/// JSON; `--cells` lists every cell, as a table or JSON, sorted and cut, with each cell's culled
+/// share when the scene is given.
+#[test]
+fn inspect_cell_json_differs_from_text_and_cells_lists_every_cell() {
+    let dir = common::temp_dir("cli-inspect-cells");
+    let (scene, store) = tiny_scene_and_store(&dir);
+    let text = vocc(&["inspect", &store, "--cell", "24"]);
+    let json = vocc(&["inspect", &store, "--cell", "24", "--json"]);
+    assert!(text.status.success() && json.status.success());
+    let t = String::from_utf8_lossy(&text.stdout);
+    assert!(t.starts_with("cell 24: x "), "{t}");
+    let j: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(j["cell"], 24);
+    let n_vos = j["vos"].as_array().unwrap().len();
+    assert_eq!(t.matches("  VO ").count(), n_vos, "{t}");
+
+    let all: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", &store, "--cells", "--json"]).stdout).unwrap();
+    let cells = all["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 49);
+    let total: u64 = cells.iter().map(|c| c["vos"].as_u64().unwrap()).sum();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", &store, "--json"]).stdout).unwrap();
+    assert_eq!(total, summary["vos"].as_u64().unwrap());
+    // Bytes per cell: index byte + 5 per VO (+ a ground byte on uneven ground, not here).
+    assert!(cells
+        .iter()
+        .all(|c| c["bytes"].as_u64().unwrap() == 1 + 5 * c["vos"].as_u64().unwrap()));
+    let top: serde_json::Value = serde_json::from_slice(
+        &vocc(&[
+            "inspect",
+            &store,
+            &scene,
+            "--height-attr",
+            "height",
+            "--cells",
+            "--sort",
+            "culled",
+            "--top",
+            "3",
+            "--json",
+        ])
+        .stdout,
+    )
+    .unwrap();
+    let top = top["cells"].as_array().unwrap();
+    assert_eq!(top.len(), 3);
+    let c: Vec<f64> = top.iter().map(|c| c["culled"].as_f64().unwrap()).collect();
+    assert!(c[0] > 0.0 && c.windows(2).all(|w| w[0] >= w[1]), "{c:?}");
+    let table = vocc(&["inspect", &store, "--cells", "--sort", "vos", "--top", "5"]);
+    let t = String::from_utf8_lossy(&table.stdout);
+    assert_eq!(t.lines().count(), 6, "{t}");
+    assert!(t.lines().next().unwrap().contains("VOs"), "{t}");
+}
+
+/// Issue 13 (friction): silent no-ops. `--region` outside the grid baked 0 cells and exited 0;
+/// `pvs` with a scene in another coordinate system than the store reported 100% visible. Both
+/// are errors now, naming the grid.
+#[test]
+fn region_outside_the_grid_and_pvs_with_a_scene_elsewhere_are_errors_not_silent_no_ops() {
+    let dir = common::temp_dir("cli-silent-no-ops");
+    let (scene, store) = tiny_scene_and_store(&dir);
+    let (rc, err) = run(&[
+        "bake",
+        &scene,
+        "--height-attr",
+        "height",
+        "--region",
+        "0,0,100,100",
+        "-o",
+        dir.join("r.vocc").to_str().unwrap(),
+    ]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(
+        err.contains("meets no cell of the grid, which covers x 1842000.0..1842400.0"),
+        "{err}"
+    );
+    let elsewhere = dir.join("rd.geojson");
+    std::fs::write(&elsewhere, boxes_geojson(&block(78_500.0, 457_900.0, 3))).unwrap();
+    let (rc, err) = run(&[
+        "pvs",
+        &store,
+        elsewhere.to_str().unwrap(),
+        "--height-attr",
+        "height",
+        "--cell",
+        "0",
+    ]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(
+        err.contains("no object of the scene meets the grid"),
+        "{err}"
+    );
+}
+
+/// Issue 13 (friction): `vocc help --help` failed; bake, eval and render had no examples.
+#[test]
+fn help_help_works_and_bake_eval_render_show_examples() {
+    let out = vocc(&["help", "--help"]);
+    assert_eq!(out.status.code(), Some(0));
+    let out = vocc(&["help", "bake"]);
+    assert_eq!(out.status.code(), Some(0));
+    for cmd in ["bake", "eval", "render"] {
+        let h = String::from_utf8_lossy(&vocc(&[cmd, "--help"]).stdout).into_owned();
+        assert!(
+            h.contains("Examples:") && h.contains(&format!("vocc {cmd} ")),
+            "{cmd}: {h}"
+        );
+    }
+    // Every command's one-line summary fits a line.
+    let h = String::from_utf8_lossy(&vocc(&["--help"]).stdout).into_owned();
+    for l in h.lines().filter(|l| l.starts_with("  ")) {
+        assert!(l.chars().count() <= 100, "too long: {l}");
+    }
+}
+
+/// Issue 13 (friction): `bake --json`, a machine-readable summary, with the scene's skipped
+/// objects; and a bake logged to a file shows progress lines, not nothing.
+#[test]
+fn bake_json_summary_carries_cells_vos_timings_bytes_and_skipped_objects() {
+    let dir = common::temp_dir("cli-bake-json");
+    let scene = dir.join("city.geojson");
+    let mut text = boxes_geojson(&block(1_842_000.0, 5_176_000.0, 8));
+    // One feature without a height: skipped, with its reason.
+    text = text.replacen(r#""properties":{"height":20}"#, r#""properties":{}"#, 1);
+    std::fs::write(&scene, text).unwrap();
+    let store = dir.join("c.vocc");
+    let out = Command::new(env!("CARGO_BIN_EXE_vocc"))
+        .args([
+            "bake",
+            scene.to_str().unwrap(),
+            "--height-attr",
+            "height",
+            "--cell-size",
+            "50",
+            "--json",
+            "-o",
+            store.to_str().unwrap(),
+        ])
+        .env("VOCC_PROGRESS_SECONDS", "0")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["cells_baked"], 49);
+    assert_eq!(v["store_bytes"], std::fs::metadata(&store).unwrap().len());
+    assert!(v["vos"].as_u64().unwrap() > 10, "{v}");
+    assert!(v["timings"]["bake_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["scene"]["skipped"], 1, "{v}");
+    assert_eq!(
+        v["scene"]["skipped_by_reason"]["no height attribute and no storey count"], 1,
+        "{v}"
+    );
+    // stderr is not a terminal here: progress comes as lines.
+    assert!(
+        err.contains("baking: 49 cells") && err.contains("cells/s"),
+        "{err}"
+    );
 }

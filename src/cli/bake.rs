@@ -4,6 +4,7 @@
 //! atomically), a progress bar on stderr while cells bake, and a summary on stderr.
 //! Invariant: the store's bytes depend only on the inputs and options, never on `--threads`.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -11,7 +12,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use vocc::bake::incremental::hashes_path;
-use vocc::bake::job::{BakeJob, BakeSummary, JobError, Progress, ReuseRefusal};
+use vocc::bake::job::{BakeJob, BakeSummary, JobError, ReuseRefusal};
 use vocc::bake::pipeline::{BakeParams, Slices};
 use vocc::scene;
 
@@ -20,8 +21,14 @@ use crate::args::{
     parse_slices, ReadArgs,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
+use crate::progress::Progress;
 
 #[derive(Args)]
+#[command(after_help = "Examples:
+  vocc bake data/lyon1/buildings_lyon1.geojson --height-attr HAUTEUR -o lyon.vocc
+  vocc bake city.geojson --height-attr height --cell-size 50 --region 1841900,5175950,1842300,5176250 -o part.vocc
+  vocc bake city-v2.geojson --height-attr height --reuse city-v1.vocc -o city-v2.vocc --json
+  vocc bake city.geojson --height-attr height --shard auto --shard-count 16 -o shard.vocc")]
 pub struct BakeArgs {
     /// Scene files: GeoJSON footprints, CityJSON (0.8, 1.x, 2.0) or OBJ.
     #[arg(required = true)]
@@ -78,6 +85,10 @@ pub struct BakeArgs {
     /// the bake time (docs/RESULTS.md).
     #[arg(long)]
     pub scan: bool,
+    /// Print the summary as JSON on stdout (cells baked, reused and skipped, VOs, ms per cell,
+    /// quantization, timings, bytes, the reuse decision, the scene's skipped objects by reason).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Which shard this process bakes: `(index, count)`.
@@ -185,19 +196,13 @@ pub fn run(a: BakeArgs) -> Result<()> {
         };
         job = job.reuse(bytes, hashes);
     }
-    let bar = indicatif::ProgressBar::new(0);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "baking {bar:40} {pos}/{len} cells, {elapsed} elapsed, about {eta} left",
-        )
-        .expect("a valid template"),
-    );
+    let progress = Progress::new("baking", "cells", 0);
     let out = job
-        .run(&|p: Progress| {
+        .run(&|p: vocc::bake::job::Progress| {
             if p.done == 0 {
-                bar.set_length(p.total as u64);
+                progress.start(p.total as u64);
             } else {
-                bar.inc(1);
+                progress.inc();
             }
         })
         .map_err(|e| match (&e, &a.reuse) {
@@ -206,7 +211,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
             }
             _ => e.into(),
         })?;
-    bar.finish_and_clear();
+    progress.finish();
     let sum = &out.summary;
     if let (Some(r), Some(old)) = (&sum.reuse, &a.reuse) {
         match r.refused {
@@ -235,9 +240,19 @@ pub fn run(a: BakeArgs) -> Result<()> {
         }
         _ => {}
     }
-    write_atomically(&a.output, |w| std::io::Write::write_all(w, &out.store))?;
-    write_atomically(&hashes_file, |w| std::io::Write::write_all(w, &out.hashes))?;
-    print_summary(sum, load_s, &a.output);
+    write_atomically(&a.output, |w| w.write_all(&out.store))?;
+    write_atomically(&hashes_file, |w| w.write_all(&out.hashes))?;
+    if a.json {
+        let mut v = serde_json::to_value(sum)?;
+        v["load_s"] = load_s.into();
+        v["store"] = a.output.display().to_string().into();
+        v["hashes"] = hashes_file.display().to_string().into();
+        let mut out = std::io::stdout().lock();
+        serde_json::to_writer_pretty(&mut out, &v)?;
+        writeln!(out)?;
+    } else {
+        print_summary(sum, load_s, &a.output);
+    }
     Ok(())
 }
 

@@ -2,19 +2,24 @@
 //! `docs/RESULTS.md`, run by `make eval`).
 //!
 //! Input: a store and its scene; or dataset paths. Output: a report on stdout (text or JSON),
-//! Markdown and SVG files where asked. Exit status 2 when any false cull is found, so scripts
-//! and CI can rely on it, or when a ray from an eye reaches a stored VO unblocked.
+//! Markdown and SVG files where asked (`eval.md`, `vos.svg`, `map.svg`). Exit status 3 (not 2, which is a usage error) when any false cull is found, so scripts and CI
+//! can rely on it, or when a ray from an eye reaches a stored VO unblocked.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Args;
 
-use vocc::eval::metrics::{object_boxes, sample_cells, summarize, vo_rays_all};
+use rayon::prelude::*;
+
+use vocc::eval::metrics::{
+    cell_vs, object_boxes, percentile, sample_cells, summarize, vo_rays_all,
+};
+use vocc::eval::plot::{cell_map, chart, Series};
 use vocc::eval::raycast::Caster;
 use vocc::eval::report::{
-    dataset_section, eval_cells, eval_markdown, machine, visible_sets, Dataset, SuiteParams,
+    dataset_section, eval_cells, eval_markdown, machine, Dataset, SuiteParams,
 };
 use vocc::eval::truth::TruthParams;
 use vocc::runtime::culler::BoxTree;
@@ -22,6 +27,7 @@ use vocc::scene::{self, ReadOptions};
 
 use crate::args::{parse_count, ReadArgs};
 use crate::files::{check_output, parse, read_store, write_atomically};
+use crate::progress::Progress;
 
 /// Ground-truth sampling options.
 #[derive(Args, Clone)]
@@ -49,6 +55,10 @@ impl TruthArgs {
 }
 
 #[derive(Args)]
+#[command(after_help = "Examples:
+  vocc eval city.vocc city.geojson --height-attr height --cells 20
+  vocc eval city.vocc city.geojson --height-attr height --cell 57,58,120 --json
+  vocc eval city.vocc city.geojson --height-attr height --cells 100 --report eval/")]
 pub struct EvalArgs {
     /// Store file.
     pub store: PathBuf,
@@ -58,19 +68,41 @@ pub struct EvalArgs {
     #[command(flatten)]
     pub read: ReadArgs,
     /// Evaluate a seeded sample of N cells (default: every cell).
-    #[arg(long, value_name = "N", value_parser = parse_count)]
+    #[arg(long, value_name = "N", value_parser = parse_count, conflicts_with = "cell")]
     pub cells: Option<usize>,
+    /// Evaluate these cells, by id (comma-separated).
+    #[arg(long, value_name = "ID,...", value_delimiter = ',')]
+    pub cell: Vec<u32>,
     #[command(flatten)]
     pub truth: TruthArgs,
     /// Print JSON (summary and per-cell figures).
     #[arg(long)]
     pub json: bool,
-    /// Write a Markdown report (and its plots) into this folder.
+    /// Write a Markdown report and its plots into this folder: eval.md, vos.svg (objects culled
+    /// against the number of VOs) and map.svg (PVS/VS per cell).
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
 }
 
-pub fn eval(a: EvalArgs) -> Result<()> {
+/// The report's files in `dir`.
+fn report_files(dir: &Path) -> [PathBuf; 3] {
+    [
+        dir.join("eval.md"),
+        dir.join("vos.svg"),
+        dir.join("map.svg"),
+    ]
+}
+
+/// `vocc eval`; returns the exit status: 0, or 3 on a false cull or a ray reaching a VO.
+pub fn eval(a: EvalArgs) -> Result<i32> {
+    let mut inputs: Vec<&Path> = vec![&a.store];
+    inputs.extend(a.scene.iter().map(PathBuf::as_path));
+    if let Some(dir) = &a.report {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        for f in report_files(dir) {
+            check_output(&f, &inputs)?;
+        }
+    }
     let bytes = read_store(&a.store)?;
     let store = parse(&a.store, &bytes)?;
     let s = scene::load(&a.scene, &a.read.options())?;
@@ -81,16 +113,35 @@ pub fn eval(a: EvalArgs) -> Result<()> {
         s.origin.to_array()
     );
     let truth = a.truth.params();
-    let ids = sample_cells(&store, a.cells, a.truth.seed);
+    let ids = if a.cell.is_empty() {
+        sample_cells(&store, a.cells, a.truth.seed)
+    } else {
+        let mut ids = a.cell.clone();
+        ids.sort_unstable();
+        ids.dedup();
+        if let Some(&id) = ids.iter().find(|&&id| id >= store.cell_count()) {
+            anyhow::bail!(
+                "cell {id} is outside the grid (cells 0..{})",
+                store.cell_count()
+            );
+        }
+        ids
+    };
     let caster = Caster::new(&s);
     let tree = BoxTree::new(&object_boxes(&s));
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_message(format!("ground truth of {} cells", ids.len()));
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    let vs = visible_sets(&s, &store, &caster, &ids, &truth);
+    let progress = Progress::new("ground truth", "cells", ids.len() as u64);
+    progress.start(ids.len() as u64);
+    let vs: Vec<Vec<u32>> = ids
+        .par_iter()
+        .map(|&id| {
+            let v = cell_vs(&s, &store, &caster, id, &truth);
+            progress.inc();
+            v
+        })
+        .collect();
+    progress.finish();
     // The 3D check of the stored VOs: 16 eye points x 16 points per VO.
     let rays = vo_rays_all(&caster, &store, &ids, 16, 16, a.truth.seed);
-    bar.finish_and_clear();
     let cells = eval_cells(&s, &store, &tree, &ids, &vs);
     let sum = summarize(&s, &cells);
     let mut out = std::io::stdout().lock();
@@ -130,26 +181,70 @@ pub fn eval(a: EvalArgs) -> Result<()> {
         )?;
     }
     if let Some(dir) = &a.report {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let [md_file, vos_file, map_file] = report_files(dir);
         let cmd = std::env::args().collect::<Vec<_>>().join(" ");
-        let md = eval_markdown(
+        let mut md = eval_markdown(
             &format!("vocc eval: {}", a.store.display()),
             &sum,
             &cells,
             &truth,
             &cmd,
         );
-        write_atomically(&dir.join("eval.md"), |w| w.write_all(md.as_bytes()))?;
-        eprintln!("wrote {}", dir.join("eval.md").display());
+        md.push_str("\n![objects culled against the number of VOs](vos.svg)\n\n![PVS/VS per cell](map.svg)\n");
+        let vo_plot = chart(
+            "objects culled against VOs per cell",
+            "VOs per cell (first k stored)",
+            "objects culled, % (mean over cells)",
+            &[Series {
+                label: "store".into(),
+                points: sum
+                    .occluded_by_vos
+                    .iter()
+                    .enumerate()
+                    .map(|(k, o)| (k as f64, 100.0 * o))
+                    .collect(),
+                line: true,
+            }],
+        );
+        let ratio_of = |id: u32| {
+            ids.binary_search(&id)
+                .ok()
+                .map(|k| cells[k].ratio())
+                .filter(|r| r.is_finite())
+        };
+        let ratios: Vec<f64> = cells
+            .iter()
+            .map(|c| c.ratio())
+            .filter(|r| r.is_finite())
+            .collect();
+        let g = store.frame().grid;
+        let map = cell_map(
+            "PVS/VS per cell (evaluated cells)",
+            g.nx,
+            g.ny,
+            &ratio_of,
+            1.0,
+            percentile(&ratios, 0.95).max(1.5),
+            "PVS/VS",
+        );
+        write_atomically(&md_file, |w| w.write_all(md.as_bytes()))?;
+        write_atomically(&vos_file, |w| w.write_all(vo_plot.as_bytes()))?;
+        write_atomically(&map_file, |w| w.write_all(map.as_bytes()))?;
+        eprintln!(
+            "wrote {}, {} and {}",
+            md_file.display(),
+            vos_file.display(),
+            map_file.display()
+        );
     }
     if sum.false_culls > 0 || rays.reached > 0 {
         eprintln!(
             "error: {} false culls (visible objects the PVS misses), {} rays reached a VO unblocked",
             sum.false_culls, rays.reached
         );
-        std::process::exit(2);
+        return Ok(3);
     }
-    Ok(())
+    Ok(0)
 }
 
 #[derive(Args)]

@@ -20,11 +20,28 @@ mod bake;
 mod eval;
 mod files;
 mod info;
+mod progress;
 mod render;
 mod store;
 
+/// The exit status rule, shown by `--help`.
+const EXIT_STATUS: &str = "Exit status:
+  0  done
+  1  the run failed: an input cannot be read or is refused, an output cannot be written, or the
+     options do not fit the scene (a region outside the grid, a grid too large)
+  2  the command line is wrong: an unknown option, a missing argument, or a value outside its
+     option's range (checked before anything is read)
+  3  vocc eval: a false cull, or a ray from an eye reaching a stored VO unblocked
+A closed output pipe (vocc ... | head) ends the run quietly with status 0.";
+
 #[derive(Parser)]
-#[command(name = "vocc", version, about = "Virtual occluders for city models")]
+#[command(
+    name = "vocc",
+    version,
+    about = "Virtual occluders for city models",
+    after_help = EXIT_STATUS,
+    disable_help_subcommand = true
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -34,17 +51,8 @@ struct Cli {
 enum Command {
     /// Bake a scene into an occluder store: at most 10 virtual occluders per view cell.
     Bake(bake::BakeArgs),
-    /// Describe a store: grid, frame, VOs per cell, bytes; or one cell's VOs (world coordinates).
-    Inspect {
-        /// Store file.
-        store: PathBuf,
-        /// Show this cell's VOs.
-        #[arg(long, value_name = "ID")]
-        cell: Option<u32>,
-        /// Print JSON.
-        #[arg(long)]
-        json: bool,
-    },
+    /// Describe a store: grid, frame, VOs per cell, bytes; one cell's VOs; or every cell.
+    Inspect(store::InspectArgs),
     /// Build the potentially visible set of one cell from a store and the scene's objects.
     Pvs {
         /// Store file.
@@ -92,11 +100,16 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Draw one cell as an SVG: `vocc render STORE SCENE... --cell ID -o cell.svg` draws the
-    /// cell, its VOs and the buildings, coloured visible, culled thanks to fusion, or culled by
-    /// single buildings alone (like the paper's Fig. 8). With --debug: `vocc render --debug
-    /// SCENE... --at X,Y` draws the 2D growth of one slice (blockers, seeds, supporting and
-    /// separating lines, the dense VOs).
+    /// Draw one cell as an SVG: its VOs and what they cull, or (--debug) its 2D growth.
+    ///
+    /// `vocc render STORE SCENE... --cell ID -o cell.svg` draws the cell, its VOs and the
+    /// buildings, coloured visible, culled thanks to fusion, or culled by single buildings alone
+    /// (like the paper's Fig. 8). `vocc render --debug SCENE... --at X,Y -o cell.svg` draws the
+    /// 2D growth of one slice (blockers, seeds, supporting and separating lines, the dense VOs).
+    #[command(after_help = "Examples:
+  vocc render city.vocc city.geojson --height-attr height --cell 57 -o cell57.svg
+  vocc render city.vocc city.geojson --height-attr height --at 1842000,5176050 --radius 400 -o cell.svg
+  vocc render --debug city.geojson --height-attr height --at 1842000,5176050 -o growth.svg")]
     Render {
         /// Draw the growth of one slice instead.
         #[arg(long)]
@@ -126,7 +139,7 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Join the shards of one bake (`vocc bake --shard I/N`) into the store a single bake writes.
+    /// Join the shards of one bake (`bake --shard I/N`) into the store a single bake writes.
     Merge {
         /// Shard store files.
         #[arg(required = true)]
@@ -135,11 +148,18 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Evaluate a store against the ground truth: false culls (must be 0), PVS/VS, occlusion,
-    /// occlusion against the number of VOs, culler time. Exit status 2 on any false cull.
+    /// Evaluate a store against the ray-sampled ground truth (exit status 3 on a false cull).
+    ///
+    /// Reports false culls (there must be none), PVS/VS, the share of objects culled, occlusion
+    /// against the number of VOs, and the culler's time per cell entry.
     Eval(eval::EvalArgs),
     /// Regenerate docs/RESULTS.md and its plots from the bundled data (what `make eval` runs).
     Results(eval::ResultsArgs),
+    /// Print this help, or one command's (`vocc help bake`).
+    Help {
+        /// The command.
+        command: Option<String>,
+    },
     /// Write a deterministic procedural city (GeoJSON footprints, attribute `height`).
     GenCity {
         /// Number of buildings.
@@ -155,16 +175,48 @@ enum Command {
 }
 
 fn main() {
-    if let Err(e) = run(Cli::parse()) {
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
-    }
+    let code = match run(Cli::parse()) {
+        Ok(code) => code,
+        Err(e) if broken_pipe(&e) => 0,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            1
+        }
+    };
+    std::process::exit(code);
 }
 
-fn run(cli: Cli) -> Result<()> {
-    match cli.command {
+/// Whether the error is a write into a closed pipe (`vocc ... | head`): Unix tools stop quietly.
+fn broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            || c.downcast_ref::<serde_json::Error>()
+                .is_some_and(|j| j.io_error_kind() == Some(std::io::ErrorKind::BrokenPipe))
+    })
+}
+
+/// `vocc help [COMMAND]`.
+fn help(command: Option<&str>) -> Result<()> {
+    use clap::CommandFactory;
+    let mut cli = Cli::command();
+    match command {
+        None => cli.print_help()?,
+        Some(name) => match cli.find_subcommand_mut(name) {
+            Some(c) => c.print_long_help()?,
+            None => anyhow::bail!("no command {name:?}; `vocc help` lists them"),
+        },
+    }
+    Ok(())
+}
+
+/// Runs one command; the exit status on success (see [`EXIT_STATUS`]).
+fn run(cli: Cli) -> Result<i32> {
+    let done: Result<()> = match cli.command {
+        Command::Eval(a) => return eval::eval(a),
+        Command::Help { command } => help(command.as_deref()),
         Command::Bake(a) => bake::run(a),
-        Command::Inspect { store, cell, json } => store::inspect(store, cell, json),
+        Command::Inspect(a) => store::inspect(a),
         Command::Pvs {
             store,
             scene,
@@ -206,7 +258,6 @@ fn run(cli: Cli) -> Result<()> {
                 render::render_store(files, &read, cell, at, radius, &output)
             }
         }
-        Command::Eval(a) => eval::eval(a),
         Command::Merge { shards, output } => store::merge(shards, &output),
         Command::Results(a) => eval::results(a),
         Command::GenCity {
@@ -226,5 +277,6 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
-    }
+    };
+    done.map(|()| 0)
 }

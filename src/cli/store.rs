@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use clap::Args;
 use serde_json::json;
 
 use vocc::bake::incremental::{hashes_path, CellHashes};
@@ -65,22 +66,267 @@ fn cell_json(f: &Frame, id: CellId, rec: &CellRecord) -> serde_json::Value {
     })
 }
 
-pub fn inspect(path: PathBuf, cell: Option<CellId>, as_json: bool) -> Result<()> {
-    let bytes = read_store(&path)?;
-    let store = parse(&path, &bytes)?;
+/// How `inspect --cells` orders its rows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SortKey {
+    /// Ascending cell id.
+    Id,
+    /// Most VOs first.
+    Vos,
+    /// Most bytes first.
+    Bytes,
+    /// Largest culled share first (needs the scene files).
+    Culled,
+}
+
+#[derive(Args)]
+#[command(after_help = "Examples:
+  vocc inspect city.vocc
+  vocc inspect city.vocc --cell 57
+  vocc inspect city.vocc --cells --sort vos --top 20
+  vocc inspect city.vocc city.geojson --height-attr height --cells --sort culled --json")]
+pub struct InspectArgs {
+    /// Store file.
+    pub store: PathBuf,
+    /// The scene files the store was baked from (optional): with --cells, each cell's share of
+    /// objects culled.
+    pub scene: Vec<PathBuf>,
+    #[command(flatten)]
+    pub read: ReadArgs,
+    /// Show this cell's VOs, in world coordinates.
+    #[arg(long, value_name = "ID", conflicts_with = "cells")]
+    pub cell: Option<u32>,
+    /// List every cell: VOs, bytes, ground; with scene files, the objects culled.
+    #[arg(long)]
+    pub cells: bool,
+    /// With --cells: the order of the rows.
+    #[arg(long, value_enum, default_value = "id", requires = "cells")]
+    pub sort: SortKey,
+    /// With --cells: only the first N rows.
+    #[arg(long, value_name = "N", value_parser = crate::args::parse_count, requires = "cells")]
+    pub top: Option<usize>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Store bytes of a cell: its index byte and its payload record (`docs/FORMAT.md` 5.2, 5.4).
+fn cell_bytes(f: &Frame, rec: &CellRecord) -> usize {
+    let n = rec.vos().len();
+    1 + if n == 0 {
+        0
+    } else {
+        5 * n + usize::from(f.per_cell_ground())
+    }
+}
+
+/// The scene's object boxes in the store's local frame, refused when none of them meets the
+/// store's grid (a scene in another coordinate system than the store).
+fn scene_boxes(
+    store: &Store,
+    store_path: &Path,
+    files: &[PathBuf],
+    read: &ReadArgs,
+) -> Result<(usize, BoxTree)> {
+    let s = scene::load(files, &read.options())?;
+    let o = s.origin;
+    let world: Vec<[f64; 6]> = s
+        .objects
+        .iter()
+        .map(|ob| {
+            let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
+            [a.x, a.y, a.z, b.x, b.y, b.z]
+        })
+        .collect();
+    let f = store.frame();
+    let g = &f.grid;
+    let (x0, y0) = (g.min_x + f.origin[0], g.min_y + f.origin[1]);
+    let (x1, y1) = (
+        x0 + g.cell_size * g.nx as f64,
+        y0 + g.cell_size * g.ny as f64,
+    );
+    if !world.is_empty()
+        && !world
+            .iter()
+            .any(|b| b[0] <= x1 && b[3] >= x0 && b[1] <= y1 && b[4] >= y0)
+    {
+        let e = s.extent();
+        anyhow::bail!(
+            "no object of the scene meets the grid of {} (x {x0:.0}..{x1:.0}, y {y0:.0}..{y1:.0}, world); the scene lies at x {:.0}..{:.0}, y {:.0}..{:.0}: give the files the store was baked from, in the same coordinate system",
+            store_path.display(),
+            e.min.x + o.x,
+            e.max.x + o.x,
+            e.min.y + o.y,
+            e.max.y + o.y
+        );
+    }
+    Ok((world.len(), BoxTree::from_world(&world, f.origin)))
+}
+
+/// `inspect --cells`: one row per cell.
+fn list_cells(a: &InspectArgs, store: &Store) -> Result<()> {
     let f = *store.frame();
+    let scene = if a.scene.is_empty() {
+        None
+    } else {
+        Some(scene_boxes(store, &a.store, &a.scene, &a.read)?)
+    };
+    anyhow::ensure!(
+        a.sort != SortKey::Culled || scene.is_some(),
+        "--sort culled needs the scene files after the store"
+    );
+    struct Row {
+        id: CellId,
+        rec: CellRecord,
+        bytes: usize,
+        culled: Option<f64>,
+    }
+    let mut visible = Vec::new();
+    let mut rows = Vec::with_capacity(store.cell_count() as usize);
+    for id in 0..store.cell_count() {
+        let rec = store.cell(id)?;
+        let culled = scene.as_ref().map(|(n, tree)| {
+            vocc::runtime::culler::pvs(&f, id, &rec, tree, &mut visible);
+            1.0 - visible.len() as f64 / (*n).max(1) as f64
+        });
+        rows.push(Row {
+            id,
+            rec,
+            bytes: cell_bytes(&f, &rec),
+            culled,
+        });
+    }
+    match a.sort {
+        SortKey::Id => {}
+        SortKey::Vos => rows.sort_by_key(|r| std::cmp::Reverse(r.rec.vos().len())),
+        SortKey::Bytes => rows.sort_by_key(|r| std::cmp::Reverse(r.bytes)),
+        SortKey::Culled => {
+            rows.sort_by(|x, y| y.culled.unwrap_or(0.0).total_cmp(&x.culled.unwrap_or(0.0)))
+        }
+    }
+    rows.truncate(a.top.unwrap_or(usize::MAX));
+    let o = f.origin;
     let mut out = std::io::stdout().lock();
-    if let Some(id) = cell {
+    if a.json {
+        let v: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|r| {
+                let c = f.grid.cell_rect(r.id).unwrap_or([0.0; 4]);
+                json!({
+                    "cell": r.id,
+                    "rect": [c[0] + o[0], c[1] + o[1], c[2] + o[0], c[3] + o[1]],
+                    "skipped": matches!(r.rec, CellRecord::Skipped),
+                    "vos": r.rec.vos().len(),
+                    "bytes": r.bytes,
+                    "ground": f.ground_z(r.rec.ground()) + o[2],
+                    "culled": r.culled,
+                })
+            })
+            .collect();
+        serde_json::to_writer_pretty(
+            &mut out,
+            &json!({"file": a.store.display().to_string(), "cells": v}),
+        )?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{:>8}  {:>12} {:>12}  {:>3}  {:>5}  {:>8}{}",
+        "cell",
+        "x (world)",
+        "y (world)",
+        "VOs",
+        "bytes",
+        "ground",
+        if scene.is_some() { "  culled" } else { "" }
+    )?;
+    for r in &rows {
+        let c = f.grid.cell_rect(r.id).unwrap_or([0.0; 4]);
+        let vos = match r.rec {
+            CellRecord::Skipped => "-".to_string(),
+            _ => r.rec.vos().len().to_string(),
+        };
+        write!(
+            out,
+            "{:>8}  {:>12.1} {:>12.1}  {vos:>3}  {:>5}  {:>8.2}",
+            r.id,
+            c[0] + o[0],
+            c[1] + o[1],
+            r.bytes,
+            f.ground_z(r.rec.ground()) + o[2]
+        )?;
+        if let Some(k) = r.culled {
+            write!(out, "  {:>5.1}%", 100.0 * k)?;
+        }
+        writeln!(out)?;
+    }
+    Ok(())
+}
+
+pub fn inspect(a: InspectArgs) -> Result<()> {
+    let path = &a.store;
+    let bytes = read_store(path)?;
+    let store = parse(path, &bytes)?;
+    let f = *store.frame();
+    if a.cells {
+        return list_cells(&a, &store);
+    }
+    anyhow::ensure!(
+        a.scene.is_empty(),
+        "scene files are read only with --cells (each cell's share of objects culled)"
+    );
+    let mut out = std::io::stdout().lock();
+    if let Some(id) = a.cell {
         let rec = cell_record(&store, id)?;
-        let v = cell_json(&f, id, &rec);
-        if as_json {
-            serde_json::to_writer_pretty(&mut out, &v)?;
+        if a.json {
+            serde_json::to_writer_pretty(&mut out, &cell_json(&f, id, &rec))?;
             writeln!(out)?;
-        } else {
-            writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+            return Ok(());
+        }
+        let o = f.origin;
+        let r = f.grid.cell_rect(id).unwrap_or([0.0; 4]);
+        writeln!(
+            out,
+            "cell {id}: x {:.1}..{:.1}, y {:.1}..{:.1} (world); {}",
+            r[0] + o[0],
+            r[2] + o[0],
+            r[1] + o[1],
+            r[3] + o[1],
+            match rec {
+                CellRecord::Skipped => "skipped (inside a building), no VOs".to_string(),
+                _ => format!(
+                    "ground {:.2} m, {} VOs, {} bytes",
+                    f.ground_z(rec.ground()) + o[2],
+                    rec.vos().len(),
+                    cell_bytes(&f, &rec)
+                ),
+            }
+        )?;
+        if let Some(v) = f.cell_view(id, rec.ground()) {
+            writeln!(out, "eyes {:.2}..{:.2} m", v.e0 + o[2], v.e1 + o[2])?;
+        }
+        for (k, q) in rec.vos().iter().enumerate() {
+            let Some(g) = f.dequantize(id, rec.ground(), q) else {
+                continue;
+            };
+            let hex: String = q.to_bytes().iter().map(|b| format!("{b:02x}")).collect();
+            writeln!(
+                out,
+                "  VO {k}: ({:.3}, {:.3}) - ({:.3}, {:.3}), {:.1} m long, {:.2}..{:.2} m, level {}, bytes {hex}",
+                g.a[0] + o[0],
+                g.a[1] + o[1],
+                g.b[0] + o[0],
+                g.b[1] + o[1],
+                (g.b[0] - g.a[0]).hypot(g.b[1] - g.a[1]),
+                g.g + o[2],
+                g.h + o[2],
+                q.level
+            )?;
         }
         return Ok(());
     }
+    let as_json = a.json;
     let n = store.cell_count();
     let mut hist = [0usize; 11];
     let mut skipped = 0;
@@ -198,17 +444,7 @@ pub fn pvs(
     let store = parse(&path, &bytes)?;
     let id = which_cell(&store, cell, at)?;
     let rec = store.cell(id)?;
-    let s = scene::load(&scene_files, &read.options())?;
-    let o = s.origin;
-    let world: Vec<[f64; 6]> = s
-        .objects
-        .iter()
-        .map(|ob| {
-            let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
-            [a.x, a.y, a.z, b.x, b.y, b.z]
-        })
-        .collect();
-    let tree = BoxTree::from_world(&world, store.frame().origin);
+    let (objects, tree) = scene_boxes(&store, &path, &scene_files, read)?;
     let mut visible = Vec::new();
     let t = Instant::now();
     let st = pvs_with_stats(store.frame(), id, &rec, &tree, &mut visible);
@@ -217,7 +453,7 @@ pub fn pvs(
     if as_json {
         serde_json::to_writer(
             &mut out,
-            &json!({"cell": id, "objects": world.len(), "pvs": visible}),
+            &json!({"cell": id, "objects": objects, "pvs": visible}),
         )?;
         writeln!(out)?;
     } else {
@@ -225,8 +461,8 @@ pub fn pvs(
             out,
             "cell {id}: {} of {} objects potentially visible ({:.1}%), {} VOs, built in {us:.0} µs ({} nodes tested)",
             visible.len(),
-            world.len(),
-            100.0 * visible.len() as f64 / world.len().max(1) as f64,
+            objects,
+            100.0 * visible.len() as f64 / objects.max(1) as f64,
             st.vos,
             st.nodes_tested
         )?;
