@@ -3,14 +3,15 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test demo bench scale eval lint fresh-clone pictures fuzz header c-bench
+.PHONY: build test demo bench scale eval lint fresh-clone pictures fuzz header c-bench c-size
 
 build:
 	$(CARGO) build --release
 
 # The whole test suite, as CI runs it: all tests, the embeddable core without the geometry stack
 # (and that it depends on thiserror alone), the C ABI (capi/: its tests, the header against
-# cbindgen, the C example against `vocc pvs`), formatting.
+# cbindgen, the C example against `vocc pvs`), the Python package (a wheel built with maturin in
+# a venv under target/py, then its pytest suite), formatting.
 test:
 	$(CARGO) test --locked
 	$(CARGO) test --locked --lib --no-default-features
@@ -18,6 +19,7 @@ test:
 	  test "$$deps" = "thiserror " || { echo "runtime dependencies: $$deps(ARCHITECTURE.md invariant 9 allows thiserror alone)" >&2; exit 1; }
 	$(CARGO) test --locked -p vocc-capi
 	CARGO="$(CARGO)" examples/c/test.sh
+	CARGO="$(CARGO)" python/test.sh
 	$(CARGO) fmt --all -- --check
 
 # The main job on the bundled example: bake Lyon into an occluder store, then describe it.
@@ -68,14 +70,24 @@ fuzz:
 header:
 	VOCC_BLESS_HEADER=1 $(CARGO) test --locked -p vocc-capi --test header
 
-# The culler through the C ABI, µs per cell entry on Lyon (docs/EMBEDDING.md); the Rust figure
-# is `cargo bench --bench culler`. C_BENCH_BOXES/C_BENCH_STORE run it on other files.
+# The culler through the C ABI, µs per cell entry (docs/EMBEDDING.md), on the stores and boxes that
+# `cargo bench --bench culler` (the Rust figures) writes to target/tmp: run that first.
 c-bench:
 	$(CARGO) build --locked --release -p vocc-capi
-	$(CARGO) build --locked --release --bin vocc --example boxes
 	mkdir -p target/tmp/c-bench
 	cc -std=c99 -O2 -Icapi/include examples/c/bench.c target/release/libvocc.a -lm -lpthread -ldl \
 		-o target/tmp/c-bench/bench
-	target/release/vocc bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/tmp/c-bench/lyon.vocc
-	target/release/examples/boxes $(DEMO_SCENE) --height-attr HAUTEUR -o target/tmp/c-bench/lyon.boxes
-	target/tmp/c-bench/bench target/tmp/c-bench/lyon.vocc target/tmp/c-bench/lyon.boxes 30
+	for name in lyon generated_100k; do \
+		target/tmp/c-bench/bench target/tmp/culler-$$name.vocc target/tmp/culler-$$name.boxes 30; done
+
+# The C library's size, stripped (docs/EMBEDDING.md).
+c-size:
+	$(CARGO) build --locked --release -p vocc-capi
+	mkdir -p target/tmp/c-size
+	strip -o target/tmp/c-size/libvocc.so target/release/libvocc.so
+	strip -g -o target/tmp/c-size/libvocc.a target/release/libvocc.a
+	cc -std=c99 -O2 -Icapi/include examples/c/pvs.c target/release/libvocc.a -lm -lpthread -ldl \
+		-s -o target/tmp/c-size/pvs
+	printf '#include <stdio.h>\nint main(void) { puts("hi"); return 0; }\n' > target/tmp/c-size/hello.c
+	cc -O2 -s target/tmp/c-size/hello.c -o target/tmp/c-size/hello
+	ls -l target/tmp/c-size/libvocc.so target/tmp/c-size/libvocc.a target/tmp/c-size/pvs target/tmp/c-size/hello

@@ -1,0 +1,366 @@
+//! `vocc._vocc`, the native half of the Python package (the Python half, `vocc/__init__.py`,
+//! turns its bytes into numpy arrays and gives the public API).
+//!
+//! Input: scene paths and reader and bake options (`bake`, `scene_boxes`); store bytes, cell
+//! ids, world positions and object boxes through the buffer protocol (`RawStore`, `RawTree`).
+//! Output: store and hashes bytes with the bake summary as JSON; frames as dicts; VOs, boxes and
+//! PVS ids as little-endian bytes for `numpy.frombuffer`.
+//! Invariants:
+//! - the bake is `vocc::bake::job::BakeJob`, the CLI's own job, so a bake here gives the bytes
+//!   `vocc bake` gives for the same options; scene loading and the bake run with the GIL
+//!   released, and progress reaches the Python callback from the calling thread only (the
+//!   job's workers only bump a counter);
+//! - every library error becomes `VoccError` with the library's message, file errors `OSError`;
+//!   nothing panics into Python (a panic would surface as pyo3's `PanicException`);
+//! - a store object owns its bytes and was checked whole once (`Store::parse`); culling is
+//!   `vocc::runtime::culler::pvs`, the engine's own.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
+
+use pyo3::buffer::PyBuffer;
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyOSError, PyRuntimeError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use vocc::bake::job::{BakeJob, Progress};
+use vocc::bake::pipeline::{BakeParams, Slices};
+use vocc::runtime::culler::{pvs, BoxTree};
+use vocc::runtime::format::{CellRecord, Store};
+use vocc::scene::{self, ReadOptions};
+
+create_exception!(
+    _vocc,
+    VoccError,
+    PyException,
+    "An error of the vocc library: bad input files, options or store bytes. The message is the library's."
+);
+
+fn lib_err(e: impl std::fmt::Display) -> PyErr {
+    VoccError::new_err(e.to_string())
+}
+
+fn read_options(
+    height_attr: Option<String>,
+    base_attr: Option<String>,
+    levels_attr: Option<String>,
+    storey_height: f64,
+    lod: Option<String>,
+) -> ReadOptions {
+    ReadOptions {
+        height_attr,
+        base_attr,
+        levels_attr,
+        storey_height,
+        lod,
+    }
+}
+
+fn load(py: Python<'_>, paths: Vec<PathBuf>, opts: ReadOptions) -> PyResult<scene::Scene> {
+    if paths.is_empty() {
+        return Err(VoccError::new_err("give at least one scene file"));
+    }
+    py.detach(|| scene::load(&paths, &opts)).map_err(lib_err)
+}
+
+fn f64_bytes<'py>(py: Python<'py>, v: impl IntoIterator<Item = f64>) -> Bound<'py, PyBytes> {
+    let b: Vec<u8> = v.into_iter().flat_map(f64::to_le_bytes).collect();
+    PyBytes::new(py, &b)
+}
+
+/// The world boxes of a scene's objects, `6 * n` little-endian f64 (xmin, ymin, zmin, xmax,
+/// ymax, zmax per object, in object order, the order `vocc pvs` numbers objects in).
+#[pyfunction]
+#[pyo3(signature = (paths, height_attr=None, base_attr=None, levels_attr=None, storey_height=3.0, lod=None))]
+fn scene_boxes<'py>(
+    py: Python<'py>,
+    paths: Vec<PathBuf>,
+    height_attr: Option<String>,
+    base_attr: Option<String>,
+    levels_attr: Option<String>,
+    storey_height: f64,
+    lod: Option<String>,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let opts = read_options(height_attr, base_attr, levels_attr, storey_height, lod);
+    let s = load(py, paths, opts)?;
+    let o = s.origin;
+    Ok(f64_bytes(
+        py,
+        s.objects.iter().flat_map(|ob| {
+            let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
+            [a.x, a.y, a.z, b.x, b.y, b.z]
+        }),
+    ))
+}
+
+/// Bakes scene files into a store: `(store bytes, hashes bytes, summary JSON)`. `region` is a
+/// world rectangle `(x0, y0, x1, y1)`. `progress`, when given, is called as
+/// `progress(done, total)` from the calling thread while the bake runs (with the GIL released
+/// between calls); an exception it raises stops further calls and is raised when the bake ends.
+#[pyfunction]
+#[pyo3(signature = (
+    paths, height_attr=None, base_attr=None, levels_attr=None, storey_height=3.0, lod=None,
+    cell_size=100.0, eye=(1.5, 2.0), slices=None, max_vos=10, region=None, threads=None,
+    scan=false, spines=0, progress=None
+))]
+#[allow(clippy::too_many_arguments)]
+fn bake<'py>(
+    py: Python<'py>,
+    paths: Vec<PathBuf>,
+    height_attr: Option<String>,
+    base_attr: Option<String>,
+    levels_attr: Option<String>,
+    storey_height: f64,
+    lod: Option<String>,
+    cell_size: f64,
+    eye: (f64, f64),
+    slices: Option<u8>,
+    max_vos: usize,
+    region: Option<(f64, f64, f64, f64)>,
+    threads: Option<usize>,
+    scan: bool,
+    spines: usize,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)> {
+    let opts = read_options(height_attr, base_attr, levels_attr, storey_height, lod);
+    let s = load(py, paths, opts)?;
+    let o = s.origin;
+    let params = BakeParams {
+        cell_size,
+        eye,
+        slices: slices.map_or(Slices::Auto, Slices::Fixed),
+        max_vos,
+        region: region.map(|(x0, y0, x1, y1)| [x0 - o.x, y0 - o.y, x1 - o.x, y1 - o.y]),
+        spines,
+        scan,
+        ..BakeParams::default()
+    };
+    let mut job = BakeJob::new(&s, params).map_err(lib_err)?;
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err(VoccError::new_err("threads must be at least 1"));
+        }
+        job = job.threads(n);
+    }
+    let done = AtomicUsize::new(0);
+    let total = AtomicUsize::new(usize::MAX);
+    let report = |p: Progress| {
+        total.store(p.total, Ordering::Relaxed);
+        done.fetch_max(p.done, Ordering::Relaxed);
+    };
+    let (result, callback_error) = py.detach(|| {
+        std::thread::scope(|scope| {
+            let worker = scope.spawn(|| job.run(&report));
+            let mut last = None;
+            let mut callback_error: Option<PyErr> = None;
+            let mut call = |finished: bool| {
+                let t = total.load(Ordering::Relaxed);
+                let d = done.load(Ordering::Relaxed);
+                if callback_error.is_some() || t == usize::MAX || last == Some(d) {
+                    return;
+                }
+                last = Some(d);
+                Python::attach(|py| {
+                    let r = match &progress {
+                        Some(cb) => cb.call1(py, (d, t)).map(|_| ()),
+                        None => Ok(()),
+                    };
+                    // Ctrl-C: the job cannot be stopped midway, so it is raised when it ends.
+                    if let Err(e) =
+                        r.and_then(|()| if finished { Ok(()) } else { py.check_signals() })
+                    {
+                        callback_error = Some(e);
+                    }
+                });
+            };
+            while !worker.is_finished() {
+                std::thread::sleep(Duration::from_millis(50));
+                call(false);
+            }
+            let result = worker.join();
+            call(true);
+            (result, callback_error)
+        })
+    });
+    let out = result
+        .map_err(|_| PyRuntimeError::new_err("internal error: the bake panicked"))?
+        .map_err(lib_err)?;
+    if let Some(e) = callback_error {
+        return Err(e);
+    }
+    let summary = serde_json::to_string(&out.summary).map_err(lib_err)?;
+    Ok((
+        PyBytes::new(py, &out.store),
+        PyBytes::new(py, &out.hashes),
+        summary,
+    ))
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename: the path
+/// holds the old file or the new one in full, never a part.
+#[pyfunction]
+fn write_atomically(py: Python<'_>, path: PathBuf, bytes: &[u8]) -> PyResult<()> {
+    let data = bytes.to_vec();
+    py.detach(|| write_file(&path, &data))
+        .map_err(|e| PyOSError::new_err(format!("cannot write {}: {e}", path.display())))
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| std::io::Error::other("the path has no file name"))?;
+    let tmp = path.with_file_name(format!(".{}.tmp", name.to_string_lossy()));
+    let r = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if r.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    r
+}
+
+/// A store's bytes, checked whole once, and the queries an engine makes.
+#[pyclass(frozen)]
+struct RawStore {
+    // `store` borrows `bytes`' heap buffer, which never moves or changes while `self` lives;
+    // `store` is declared first so it is dropped first.
+    store: Store<'static>,
+    #[allow(dead_code)]
+    bytes: Box<[u8]>,
+}
+
+#[pymethods]
+impl RawStore {
+    #[new]
+    fn new(data: &[u8]) -> PyResult<RawStore> {
+        let bytes: Box<[u8]> = data.into();
+        // SAFETY: the slice points into `bytes`' heap allocation, which lives as long as the
+        // RawStore and is never mutated; the 'static lifetime never escapes the struct (every
+        // method returns owned values).
+        let view: &'static [u8] =
+            unsafe { std::slice::from_raw_parts(bytes.as_ptr(), bytes.len()) };
+        let store = Store::parse(view).map_err(lib_err)?;
+        Ok(RawStore { store, bytes })
+    }
+
+    fn bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.bytes)
+    }
+
+    fn frame<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let f = self.store.frame();
+        let d = PyDict::new(py);
+        d.set_item("origin", (f.origin[0], f.origin[1], f.origin[2]))?;
+        d.set_item("min_x", f.grid.min_x)?;
+        d.set_item("min_y", f.grid.min_y)?;
+        d.set_item("cell_size", f.grid.cell_size)?;
+        d.set_item("nx", f.grid.nx)?;
+        d.set_item("ny", f.grid.ny)?;
+        d.set_item("quantum", f.quantum)?;
+        d.set_item("eye_lo", f.eye_lo)?;
+        d.set_item("eye_hi", f.eye_hi)?;
+        d.set_item("ground_z0", f.ground_z0)?;
+        d.set_item("ground_step", f.ground_step)?;
+        d.set_item("h0", f.h0)?;
+        d.set_item("h_ratio", f.h_ratio)?;
+        Ok(d)
+    }
+
+    fn cell_count(&self) -> u32 {
+        self.store.cell_count()
+    }
+
+    /// The cell holding local position (x, y), or None.
+    fn cell_at(&self, x: f64, y: f64) -> Option<u32> {
+        self.store.cell_at(x, y)
+    }
+
+    /// `(skipped, ground level, VO geometry bytes, VO grid bytes)`: per VO 6 f64 (local ax, ay,
+    /// bx, by, bottom, top) and 5 u16 (x1, y1, x2, y2, level).
+    fn cell<'py>(
+        &self,
+        py: Python<'py>,
+        id: u32,
+    ) -> PyResult<(bool, u8, Bound<'py, PyBytes>, Bound<'py, PyBytes>)> {
+        let rec = self.store.cell(id).map_err(lib_err)?;
+        let f = self.store.frame();
+        let mut geom = Vec::new();
+        let mut grid: Vec<u8> = Vec::new();
+        for q in rec.vos() {
+            let g = f
+                .dequantize(id, rec.ground(), q)
+                .ok_or_else(|| VoccError::new_err(format!("cell {id} is outside the grid")))?;
+            geom.extend([g.a[0], g.a[1], g.b[0], g.b[1], g.g, g.h]);
+            for v in [q.x1, q.y1, q.x2, q.y2, q.level as u16] {
+                grid.extend(v.to_le_bytes());
+            }
+        }
+        Ok((
+            matches!(rec, CellRecord::Skipped),
+            rec.ground(),
+            f64_bytes(py, geom),
+            PyBytes::new(py, &grid),
+        ))
+    }
+
+    /// The PVS of cell `id` over `tree`'s objects: ascending ids as little-endian u32 bytes.
+    fn pvs<'py>(&self, py: Python<'py>, id: u32, tree: &RawTree) -> PyResult<Bound<'py, PyBytes>> {
+        let rec = self.store.cell(id).map_err(lib_err)?;
+        let mut out = Vec::new();
+        py.detach(|| pvs(self.store.frame(), id, &rec, &tree.tree, &mut out));
+        let b: Vec<u8> = out.iter().flat_map(|v| v.to_le_bytes()).collect();
+        Ok(PyBytes::new(py, &b))
+    }
+}
+
+/// The box hierarchy over object boxes (a buffer of `6 * n` f64, world coordinates), in the
+/// local frame of `origin`.
+#[pyclass(frozen)]
+struct RawTree {
+    tree: BoxTree,
+}
+
+#[pymethods]
+impl RawTree {
+    #[new]
+    fn new(py: Python<'_>, boxes: PyBuffer<f64>, origin: (f64, f64, f64)) -> PyResult<RawTree> {
+        let flat = boxes.to_vec(py)?;
+        if flat.len() % 6 != 0 {
+            return Err(VoccError::new_err(format!(
+                "boxes hold {} numbers, not a multiple of 6",
+                flat.len()
+            )));
+        }
+        if flat.len() / 6 > u32::MAX as usize {
+            return Err(VoccError::new_err("more than 2^32 - 1 boxes"));
+        }
+        let world: Vec<[f64; 6]> = flat
+            .chunks_exact(6)
+            .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
+            .collect();
+        let tree = py.detach(|| BoxTree::from_world(&world, [origin.0, origin.1, origin.2]));
+        Ok(RawTree { tree })
+    }
+
+    fn __len__(&self) -> usize {
+        self.tree.len()
+    }
+}
+
+#[pymodule]
+fn _vocc(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("VoccError", m.py().get_type::<VoccError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(scene_boxes, m)?)?;
+    m.add_function(wrap_pyfunction!(bake, m)?)?;
+    m.add_function(wrap_pyfunction!(write_atomically, m)?)?;
+    m.add_class::<RawStore>()?;
+    m.add_class::<RawTree>()?;
+    Ok(())
+}
