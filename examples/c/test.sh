@@ -3,7 +3,7 @@
 # and the C example with the system C compiler, bakes the bundled Lyon store, and checks that the
 # example's PVS equals `vocc pvs --json` byte for byte for a spread of cells (at least one of
 # which must cull something), and that a damaged store is refused with the library's message.
-# Builds with cargo's test profile, so it reuses what `cargo test` compiled.
+# Builds with cargo's test profile and `cargo test`'s features, so it reuses what that compiled.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 CARGO=${CARGO:-cargo}
@@ -12,7 +12,9 @@ out=target/tmp/c-example
 mkdir -p "$out"
 
 $CARGO build --locked --profile test -p vocc-capi
-$CARGO build --locked --profile test --bin vocc --example boxes
+# The CLI and the box writer as `cargo test` builds them (its features, with the dev-dependencies
+# unified), so after `cargo test` nothing is compiled again.
+$CARGO test --locked --no-run --test cli --example boxes
 lib=target/debug
 "$CC" -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Icapi/include examples/c/pvs.c \
   "$lib/libvocc.a" -lm -lpthread -ldl -o "$out/pvs"
