@@ -87,7 +87,7 @@ c-size:
 	strip -o target/tmp/c-size/libvocc.so target/release/libvocc.so
 	strip -g -o target/tmp/c-size/libvocc.a target/release/libvocc.a
 	cc -std=c99 -O2 -Icapi/include examples/c/pvs.c target/release/libvocc.a -lm -lpthread -ldl \
-		-s -o target/tmp/c-size/pvs
+		-s -Wl,--gc-sections -o target/tmp/c-size/pvs
 	printf '#include <stdio.h>\nint main(void) { puts("hi"); return 0; }\n' > target/tmp/c-size/hello.c
 	cc -O2 -s target/tmp/c-size/hello.c -o target/tmp/c-size/hello
 	ls -l target/tmp/c-size/libvocc.so target/tmp/c-size/libvocc.a target/tmp/c-size/pvs target/tmp/c-size/hello

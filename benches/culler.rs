@@ -5,7 +5,9 @@
 //! Setup (not timed): load the scene, bake the store (Lyon: every 100 m cell; the generated
 //! city: the 25 m cells of the 400 m square at its centre, since the culler's cost depends on
 //! the number of objects, not of baked cells; its detached buildings leave gaps that 100 m cells
-//! see through, so only smaller cells get VOs there), build the box hierarchy once. Each timed iteration enters the
+//! see through, so only smaller cells get VOs there), build the box hierarchy once, and write the
+//! store and the world boxes to `target/tmp/culler-NAME.{vocc,boxes}` for the C timing loop
+//! (`make c-bench`, `examples/c/bench.c`). Each timed iteration enters the
 //! next cell of the list, round robin.
 
 use std::path::PathBuf;
@@ -28,6 +30,19 @@ fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, cell_size: f64, region:
     let store = Store::parse(&bytes).unwrap();
     // The scene's local frame is the store's: both come from the same load.
     let tree = BoxTree::new(&object_boxes(s));
+    // The same store and boxes (world) for the C timing loop, examples/c/bench.c (make c-bench).
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    std::fs::write(dir.join(format!("culler-{name}.vocc")), &bytes).unwrap();
+    let o = s.origin;
+    let text: String = s
+        .objects
+        .iter()
+        .map(|ob| {
+            let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
+            format!("{} {} {} {} {} {}\n", a.x, a.y, a.z, b.x, b.y, b.z)
+        })
+        .collect();
+    std::fs::write(dir.join(format!("culler-{name}.boxes")), text).unwrap();
     let cells: Vec<u32> = (0..store.cell_count())
         .filter(|&id| !store.cell(id).unwrap().vos().is_empty())
         .collect();
