@@ -1167,3 +1167,75 @@ fn bake_json_summary_carries_cells_vos_timings_bytes_and_skipped_objects() {
         "{err}"
     );
 }
+
+/// Issue 13, defect 7: the render caption overflowed the picture's right edge in every render
+/// (one line of about 150 characters in a 900 px picture). Every caption line fits: at 13 px
+/// sans-serif a character is at most about 0.6 em wide on average.
+#[test]
+fn render_caption_fits_within_the_pictures_right_edge() {
+    let dir = common::temp_dir("cli-render-caption");
+    let (scene, store) = tiny_scene_and_store(&dir);
+    let svg = dir.join("cell.svg");
+    let (rc, err) = run(&[
+        "render",
+        &store,
+        &scene,
+        "--height-attr",
+        "height",
+        "--cell",
+        "24",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(rc, Some(0), "{err}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let width: f64 = text
+        .split("width=\"")
+        .nth(1)
+        .and_then(|t| t.split('"').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let mut captions = 0;
+    for t in text.split("<text ").skip(1) {
+        let x: f64 = t
+            .split("x=\"")
+            .nth(1)
+            .and_then(|v| v.split('"').next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        let body = t.split('>').nth(1).unwrap().split('<').next().unwrap();
+        if body.len() < 20 {
+            continue; // a VO's number
+        }
+        captions += 1;
+        let right = x + 0.6 * 13.0 * body.chars().count() as f64;
+        assert!(
+            right <= width,
+            "caption reaches {right:.0} px of {width}: {body}"
+        );
+    }
+    assert!(captions >= 2, "{text}");
+}
+
+/// Issue 13, defect 11: a one-triangle OBJ was reported as "closed mesh, but no column could be
+/// proven solid". Its three edges are each used once: it is an open mesh.
+#[test]
+fn a_one_triangle_obj_is_an_open_mesh_not_a_closed_one() {
+    let dir = common::temp_dir("cli-one-triangle");
+    let obj = dir.join("triangle.obj");
+    std::fs::write(&obj, "o tri\nv 0 0 0\nv 10 0 0\nv 0 10 0\nf 1 2 3\n").unwrap();
+    let out = vocc(&["info", obj.to_str().unwrap(), "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let reasons = v["no_blocker"].as_array().unwrap();
+    assert_eq!(reasons.len(), 1, "{v}");
+    let why = reasons[0]["reason"].as_str().unwrap();
+    assert!(why.starts_with("open mesh (3 edges"), "{why}");
+    assert!(!why.contains("closed mesh"), "{why}");
+}

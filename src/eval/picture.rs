@@ -116,11 +116,14 @@ pub fn cell_picture(
             );
         }
     }
+    // The caption in two lines, each well within the picture's width (at most about 110
+    // characters of 13 px sans-serif).
     let _ = write!(
         s,
-        r##"<text x="10" y="{}">cell {id}: {} VOs (blue, numbered in stored order); buildings visible {n_vis} (grey), culled thanks to fusion {n_fused} (red){}</text></svg>"##,
-        size + 35.0,
+        r##"<text x="10" y="{}">cell {id}: {} VOs (blue, numbered in stored order)</text><text x="10" y="{}">buildings: visible {n_vis} (grey), culled thanks to fusion {n_fused} (red){}</text></svg>"##,
+        size + 24.0,
         rec.vos().len(),
+        size + 46.0,
         if baseline.is_some() {
             format!(", culled by single buildings alone {n_single} (orange)")
         } else {

@@ -15,6 +15,8 @@
 //!    One exception: when every odd edge lies in the horizontal plane z0 of the mesh's lowest
 //!    vertex (a building with no floor face), add the cap: the horizontal face at z0 whose rings
 //!    are those edges. The capped mesh is closed mod 2 and is what the walls and roof enclose.
+//!    A mesh lying wholly in that plane (a lone triangle, a flat footprint group) gets no cap: it
+//!    encloses nothing and is reported open.
 //!    The cap never changes an answer below: every gap tested lies between face z-ranges, so
 //!    above z0, and the upward ray of step 3 never reaches z0. So the cap need not be built.
 //! 2. *Columns.* In a frame rotated to the object's dominant horizontal direction, a square grid
@@ -215,7 +217,15 @@ pub fn solid_pieces(mesh: &Mesh) -> Result<Vec<SolidPiece>, NoBlocker> {
     // without a floor, as in Delft's LoD1) is closed by the floor cap those edges bound; see the
     // module header, step 1.
     let floor_cap = (odd > 0).then(|| mesh_zmin(mesh));
-    if odd > 0 && !at_base {
+    // A mesh lying wholly in that plane (a lone triangle, a flat footprint) is no building
+    // without a floor: it is open, and bounds no volume.
+    let flat = floor_cap.is_some_and(|z0| {
+        mesh.faces
+            .iter()
+            .flat_map(|f| f.rings.iter().flatten())
+            .all(|&i| mesh.vertices[i as usize].z == z0)
+    });
+    if odd > 0 && (!at_base || flat) {
         return Err(NoBlocker::OpenMesh {
             boundary_edges: odd,
         });
