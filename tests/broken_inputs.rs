@@ -116,11 +116,10 @@ fn unknown_extension() {
 fn no_height_option_for_geojson() {
     let path = repo(common::LYON);
     let e = scene::load(&[path], &ReadOptions::default()).unwrap_err();
-    assert!(
-        matches!(e.kind, LoadErrorKind::MissingAttribute { .. }),
-        "{e}"
-    );
+    // Issue 13: this said `attribute "(none given)" is missing`.
+    assert_eq!(e.kind, LoadErrorKind::NoHeightOption, "{e}");
     assert!(e.to_string().contains("--height-attr"), "{e}");
+    assert!(!e.to_string().contains("(none given)"), "{e}");
 }
 
 #[test]

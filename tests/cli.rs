@@ -1239,3 +1239,64 @@ fn a_one_triangle_obj_is_an_open_mesh_not_a_closed_one() {
     assert!(why.starts_with("open mesh (3 edges"), "{why}");
     assert!(!why.contains("closed mesh"), "{why}");
 }
+
+/// Issue 13 (friction), misleading messages: a 1e9 m height was blamed as a coordinate; a
+/// 1e300 coordinate printed 301 digits; a missing `--height-attr` said
+/// `attribute "(none given)" is missing`.
+#[test]
+fn messages_blame_the_height_print_1e300_short_and_ask_for_height_attr() {
+    let dir = common::temp_dir("cli-messages");
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let tall = write(
+        "tall.geojson",
+        r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"height":1e9},"geometry":{"type":"Polygon","coordinates":[[[0,0],[10,0],[10,10],[0,10],[0,0]]]}}]}"#,
+    );
+    let far = write(
+        "far.geojson",
+        r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"height":10},"geometry":{"type":"Polygon","coordinates":[[[1e300,0],[10,0],[10,10],[0,10],[1e300,0]]]}}]}"#,
+    );
+    let (rc, err) = run(&["info", &tall, "--height-attr", "height"]);
+    assert_eq!(rc, Some(1));
+    assert!(err.contains("height = 1e9 m is out of range"), "{err}");
+    assert!(!err.contains("coordinate"), "{err}");
+    let (rc, err) = run(&["info", &far, "--height-attr", "height"]);
+    assert_eq!(rc, Some(1));
+    assert!(
+        err.contains("coordinate x = 1e300 m is out of range"),
+        "{err}"
+    );
+    assert!(err.len() < 300, "{} bytes: {err}", err.len());
+    let (rc, err) = run(&["info", &far]);
+    assert_eq!(rc, Some(1));
+    assert!(
+        err.contains("need a height: give --height-attr NAME"),
+        "{err}"
+    );
+    assert!(!err.contains("(none given)"), "{err}");
+}
+
+/// Issue 13 (friction): `--lod 9` said "the scene has no objects"; it names the LoDs there are.
+#[test]
+fn lod_9_lists_the_lods_that_exist_not_the_scene_has_no_objects() {
+    let dir = common::temp_dir("cli-lod-9");
+    let city = dir.join("city.json");
+    std::fs::write(
+        &city,
+        r#"{"type":"CityJSON","version":"1.1","transform":{"scale":[1,1,1],"translate":[0,0,0]},
+        "vertices":[[0,0,0],[10,0,0],[10,10,0],[0,10,0]],
+        "CityObjects":{"b1":{"type":"Building","geometry":[
+          {"type":"MultiSurface","lod":"1","boundaries":[[[0,1,2,3]]]},
+          {"type":"MultiSurface","lod":"2.2","boundaries":[[[0,1,2,3]]]}]}}}"#,
+    )
+    .unwrap();
+    let (rc, err) = run(&["info", city.to_str().unwrap(), "--lod", "9"]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(
+        err.contains("no object has geometry at LoD 9; the files hold LoD 1, 2.2"),
+        "{err}"
+    );
+}

@@ -183,7 +183,14 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
             match kind_of(gty) {
                 Some(Kind::Instance) => unsupported = Some(gty.to_string()),
                 Some(Kind::NotAreal) => not_areal = Some(gty.to_string()),
-                Some(k) => usable.push((g, k, g.get("lod"))),
+                Some(k) => {
+                    match g.get("lod") {
+                        Some(Value::Number(n)) => out.lods.insert(n.to_string()),
+                        Some(Value::String(t)) => out.lods.insert(t.trim().to_string()),
+                        _ => false,
+                    };
+                    usable.push((g, k, g.get("lod")))
+                }
                 None => {
                     return Err(err(
                         at(),

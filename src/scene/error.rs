@@ -56,20 +56,31 @@ pub enum LoadErrorKind {
         format: &'static str,
         message: String,
     },
-    #[error("coordinate is not finite ({0})")]
+    #[error("{0} is not a finite number")]
     NonFinite(String),
-    #[error("coordinate {value} is out of range (|x| must be below {limit:e} m)")]
-    OutOfRange { value: f64, limit: f64 },
+    /// `what` names the value: "coordinate x", "height", "base", "transform.scale[0]", ...
+    #[error("{what} = {} m is out of range (its magnitude must be below {limit:e} m)", short(*value))]
+    OutOfRange {
+        what: String,
+        value: f64,
+        limit: f64,
+    },
     #[error("unknown geometry type {0:?}")]
     UnknownGeometryType(String),
     #[error("attribute {attr:?} is missing from every feature; {hint}")]
     MissingAttribute { attr: String, hint: String },
+    /// GeoJSON footprints carry no height, and no attribute to read one from was named.
+    #[error("GeoJSON footprints need a height: give --height-attr NAME (or --levels-attr NAME for storey counts)")]
+    NoHeightOption,
     #[error("attribute {attr:?} has value {value}, which is not a number")]
     BadAttribute { attr: String, value: String },
     #[error("unsupported CityJSON version {0:?} (supported: 0.x, 1.x, 2.x)")]
     UnsupportedVersion(String),
     #[error("the scene has no objects")]
     NoObjects,
+    /// Every object was skipped for want of geometry at the requested level of detail.
+    #[error("no object has geometry at LoD {lod}; the files hold LoD {}", available.join(", "))]
+    NoObjectsAtLod { lod: String, available: Vec<String> },
 }
 
 /// A reader error: the file, the place in it, and what is wrong.
@@ -96,12 +107,36 @@ impl LoadError {
 /// stages would lose all precision.
 pub const MAX_COORD_M: f64 = 1.0e9;
 
-/// Checks one coordinate where it enters the crate.
+/// A number for a message: plain below 1e6, else in scientific notation with at most 6
+/// significant digits (1e300 prints as `1e300`, not 301 digits).
+pub fn short(v: f64) -> String {
+    if v.abs() < 1e6 {
+        format!("{v}")
+    } else {
+        let s = format!("{v:.5e}");
+        // Drop trailing zeros of the mantissa: 1.00000e9 -> 1e9, 1.25000e9 -> 1.25e9.
+        match s.split_once('e') {
+            Some((m, e)) if m.contains('.') => {
+                let m = m.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{e}")
+            }
+            _ => s,
+        }
+    }
+}
+
+/// Checks one value where it enters the crate: `what` is "x", "y" or "z" for a coordinate, or
+/// the name of what else it is ("height", "base", ...), so messages blame the right thing.
 pub fn check_coord(v: f64, what: &str) -> Result<f64, LoadErrorKind> {
+    let what = match what {
+        "x" | "y" | "z" => format!("coordinate {what}"),
+        w => w.to_string(),
+    };
     if !v.is_finite() {
         Err(LoadErrorKind::NonFinite(format!("{what} = {v}")))
     } else if v.abs() >= MAX_COORD_M {
         Err(LoadErrorKind::OutOfRange {
+            what,
             value: v,
             limit: MAX_COORD_M,
         })

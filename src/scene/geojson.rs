@@ -94,10 +94,7 @@ impl<'a> GeoJsonReader<'a> {
             return Err(LoadError::new(
                 path,
                 Location::File,
-                LoadErrorKind::MissingAttribute {
-                    attr: "(none given)".into(),
-                    hint: "GeoJSON footprints need --height-attr NAME or --levels-attr NAME".into(),
-                },
+                LoadErrorKind::NoHeightOption,
             ));
         }
         Ok(GeoJsonReader {

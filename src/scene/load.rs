@@ -91,7 +91,9 @@ fn build_scene(
 
     let t = Instant::now();
     let mut raw: Vec<(u32, RawObject)> = Vec::new();
+    let mut lods = std::collections::BTreeSet::new();
     for (fi, ((read, format), path)) in reads.into_iter().zip(&paths).enumerate() {
+        lods.extend(read.lods);
         report.files.push(FileStats {
             path: path.clone(),
             format,
@@ -106,11 +108,23 @@ fn build_scene(
     }
     if raw.is_empty() {
         let path = paths.first().cloned().unwrap_or_default();
-        return Err(LoadError::new(
-            path,
-            Location::File,
-            LoadErrorKind::NoObjects,
-        ));
+        // Every object skipped for want of the requested LoD: say which LoDs there are.
+        let wanted = report.skipped.first().and_then(|(_, s)| match &s.reason {
+            super::SkipReason::NoGeometryAtLod(l) => Some(l.clone()),
+            _ => None,
+        });
+        let all_lod = report
+            .skipped
+            .iter()
+            .all(|(_, s)| matches!(s.reason, super::SkipReason::NoGeometryAtLod(_)));
+        let kind = match wanted {
+            Some(lod) if all_lod && !lods.is_empty() => LoadErrorKind::NoObjectsAtLod {
+                lod,
+                available: lods.into_iter().collect(),
+            },
+            _ => LoadErrorKind::NoObjects,
+        };
+        return Err(LoadError::new(path, Location::File, kind));
     }
     let world = raw
         .par_iter()

@@ -148,6 +148,8 @@ pub struct FileRead {
     pub skipped: Vec<Skipped>,
     /// CityJSON: city objects of other types, skipped and counted by type.
     pub other_types: BTreeMap<String, usize>,
+    /// CityJSON: the levels of detail of the geometries of the objects read, as written.
+    pub lods: std::collections::BTreeSet<String>,
 }
 
 /// An axis-aligned box.
