@@ -12,7 +12,8 @@
 //! - blob: an accepted blob re-encodes to the same bytes, an accepted frame to the same 112 bytes;
 //!   the culler's invariants as for the store;
 //! - scene: object indices follow input order, boxes are finite and not empty, every blocker is
-//!   a strictly convex counter-clockwise polygon with finite coordinates and `base < top`;
+//!   a strictly convex counter-clockwise polygon or a 2-vertex wall, with finite coordinates
+//!   and `base < top`;
 //! - walkable: every ring has at least 3 finite points.
 //!
 //! Runtime targets build with `--no-default-features`; scene targets need the `bake` feature.
@@ -192,7 +193,7 @@ mod scene_targets {
 
     use glam::DVec3;
 
-    use crate::geom::predicates::is_strictly_convex_ccw;
+    use crate::geom::predicates::is_convex_piece;
     use crate::scene::{load_bytes, summary, walkable, LoadError, ReadOptions};
 
     /// Reader options of the scene targets: GeoJSON heights from `height`, or `levels` storeys.
@@ -226,8 +227,8 @@ mod scene_targets {
             );
             last = b.object;
             assert!(
-                b.polygon.iter().all(|p| p.is_finite()) && is_strictly_convex_ccw(&b.polygon),
-                "blocker {k} is not strictly convex and counter-clockwise: {:?}",
+                b.polygon.iter().all(|p| p.is_finite()) && is_convex_piece(&b.polygon),
+                "blocker {k} is neither strictly convex and counter-clockwise nor a wall: {:?}",
                 b.polygon
             );
             assert!(

@@ -2,15 +2,16 @@
 //!
 //! Input: the repo copies of the Den Haag (CityJSON 0.8 and OBJ), Delft (CityJSON 2.0 and OBJ)
 //! and Gelderseplein (OBJ) datasets under `data/`. Output: assertions on object counts, other
-//! types, and how many objects gave blockers or none and why (figures measured on these files).
-//! Invariant: every blocker is strictly convex, counter-clockwise, has top above base, and lies
-//! within its object's bounding box.
+//! types, and how many objects gave blockers (solid prisms, walls) or none and why (figures
+//! measured on these files).
+//! Invariant: every blocker is a convex piece (strictly convex and counter-clockwise, or a
+//! 2-vertex wall), has top above base, and lies within its object's bounding box.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use vocc::geom::predicates::is_strictly_convex_ccw;
+use vocc::geom::predicates::is_convex_piece;
 use vocc::scene::{load, ReadOptions, Scene};
 
 fn data(rel: &str) -> PathBuf {
@@ -22,8 +23,12 @@ fn data(rel: &str) -> PathBuf {
 struct Summary {
     objects: usize,
     with_blockers: usize,
+    /// Objects with a solid prism, and with a wall.
+    with_prisms: usize,
+    with_walls: usize,
     without: BTreeMap<String, usize>,
     pieces: usize,
+    walls: usize,
 }
 
 fn load_one(rel: &str) -> (Scene, Summary) {
@@ -31,9 +36,16 @@ fn load_one(rel: &str) -> (Scene, Summary) {
     let scene = load(&[data(rel)], &ReadOptions::default()).unwrap();
     let secs = t.elapsed().as_secs_f64();
     let mut has = vec![false; scene.objects.len()];
+    let mut prism = vec![false; scene.objects.len()];
+    let mut wall = vec![false; scene.objects.len()];
     for b in &scene.blockers {
         has[b.object as usize] = true;
-        assert!(is_strictly_convex_ccw(&b.polygon), "{b:?}");
+        if b.polygon.len() == 2 {
+            wall[b.object as usize] = true;
+        } else {
+            prism[b.object as usize] = true;
+        }
+        assert!(is_convex_piece(&b.polygon), "{b:?}");
         assert!(b.top > b.base);
         let bb = scene.objects[b.object as usize].bbox;
         for p in &b.polygon {
@@ -45,18 +57,29 @@ fn load_one(rel: &str) -> (Scene, Summary) {
     for (_, why) in &scene.report.no_blocker {
         *without.entry(why.label()).or_default() += 1;
     }
+    let count = |v: &[bool]| v.iter().filter(|&&h| h).count();
     let s = Summary {
         objects: scene.objects.len(),
-        with_blockers: has.iter().filter(|&&h| h).count(),
+        with_blockers: count(&has),
+        with_prisms: count(&prism),
+        with_walls: count(&wall),
         without,
         pieces: scene.blockers.len(),
+        walls: scene
+            .blockers
+            .iter()
+            .filter(|b| b.polygon.len() == 2)
+            .count(),
     };
     eprintln!(
-        "{rel}: {} objects, {} with blockers, without: {:?}, {} pieces, skipped {}, other types {:?}, load {secs:.3} s",
+        "{rel}: {} objects, {} with blockers ({} prisms, {} walls), without: {:?}, {} pieces ({} walls), skipped {}, other types {:?}, load {secs:.3} s",
         s.objects,
         s.with_blockers,
+        s.with_prisms,
+        s.with_walls,
         s.without,
         s.pieces,
+        s.walls,
         scene.report.skipped.len(),
         scene.report.files[0].other_types
     );
@@ -78,15 +101,15 @@ fn counts(s: &Summary) -> (usize, usize, usize, usize, usize) {
 fn denhaag_obj() {
     let (scene, s) = load_one("denhaag/DenHaag_01_buildings.obj");
     assert_eq!(scene.report.files[0].format, "OBJ");
-    // (objects, with blockers, open, closed but unproven, other reasons), as measured.
-    assert_eq!(counts(&s), (1990, 1918, 2, 70, 0));
+    // (objects, with blockers, open, closed but unproven, other reasons), as measured: every
+    // object gives walls now; 1,918 also give solid prisms (2 are open, 70 closed but unproven).
+    assert_eq!(counts(&s), (1990, 1990, 0, 0, 0));
+    assert_eq!((s.with_prisms, s.with_walls, s.walls), (1918, 1990, 10236));
     // Every object either gives blockers or says why not.
     assert_eq!(
         s.with_blockers + s.without.values().sum::<usize>(),
         s.objects
     );
-    // The README says 1,988 closed: the 2 open ones are exactly the rest.
-    assert!(s.with_blockers as f64 > 0.95 * 1988.0);
     assert!(s.pieces >= s.with_blockers);
 }
 
@@ -103,7 +126,10 @@ fn denhaag_cityjson_0_8() {
     );
     assert_eq!(s.objects, 844 + 1653 - 507);
     assert!(scene.report.skipped.is_empty());
-    assert_eq!(counts(&s), (1990, 1913, 0, 77, 0));
+    // Every object gives walls; 1,913 also give solid prisms. The triangulated OBJ of the same
+    // data gives the same 10,236 walls: the triangles of a wall face join again.
+    assert_eq!(counts(&s), (1990, 1990, 0, 0, 0));
+    assert_eq!((s.with_prisms, s.with_walls, s.walls), (1913, 1990, 10236));
 }
 
 #[test]
@@ -125,6 +151,7 @@ fn delft_cityjson_2_0() {
     // The LoD1 solids of 3dfier have no floor surface: every odd edge lies at the lowest
     // vertex, so the floor cap closes them (solid.rs, step 1) and every building gives blockers.
     assert_eq!(counts(&s), (160, 160, 0, 0, 0));
+    assert_eq!((s.with_prisms, s.with_walls, s.walls), (160, 160, 1601));
 }
 
 #[test]
@@ -138,9 +165,20 @@ fn gelderseplein_obj_groups_are_objects() {
     let (scene, s) = load_one("gelderseplein/gelderseplein.obj");
     // 24 buildings, each a footprint group and overlapping 3D groups: every group is an object.
     assert_eq!(s.objects, 105);
-    // The 24 flat footprint groups lie wholly in one plane: open meshes (their edges are used
-    // once; a floor cap would bound no volume), like the 4 LoD groups open above their base.
-    assert_eq!(counts(&s), (105, 77, 28, 0, 0));
+    // The 24 flat footprint groups lie wholly in one plane: open meshes with no vertical face.
+    // Every 3D group of every building gives walls; 77 also give solid prisms (4 LoD groups
+    // are open above their base).
+    assert_eq!(counts(&s), (105, 81, 24, 0, 0));
+    assert_eq!((s.with_prisms, s.with_walls, s.walls), (77, 81, 5545));
+    for o in &scene.objects {
+        let flat = o.bbox.max.z == o.bbox.min.z;
+        let walls = scene
+            .blockers
+            .iter()
+            .filter(|b| b.object == o.index && b.polygon.len() == 2)
+            .count();
+        assert_eq!(walls == 0, flat, "{} {:?}: {walls} walls", o.name, o.bbox);
+    }
     // Objects keep file order and their group line.
     let lines: Vec<usize> = scene
         .objects

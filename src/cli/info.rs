@@ -56,10 +56,18 @@ fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<
     )?;
     writeln!(
         out,
-        "convex pieces: {} ({:.2} per blocker object)",
+        "convex pieces: {} ({:.2} per blocker object), of them {} walls",
         s.convex_pieces,
-        s.convex_pieces as f64 / s.blocker_objects.max(1) as f64
+        s.convex_pieces as f64 / s.blocker_objects.max(1) as f64,
+        s.walls
     )?;
+    if s.mesh_objects > 0 {
+        writeln!(
+            out,
+            "mesh blockers: {} objects gave solid prisms, {} gave walls",
+            s.prism_objects, s.wall_objects
+        )?;
+    }
     let st = |x: &summary::Stats| {
         format!(
             "min {:.1}, median {:.1}, mean {:.1}, p90 {:.1}, max {:.1}",

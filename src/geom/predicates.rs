@@ -115,6 +115,41 @@ pub fn point_in_ring(ring: &[DVec2], p: DVec2) -> Containment {
     }
 }
 
+/// Exact test of `p` against the even-odd region of a set of edges that form closed cycles mod 2
+/// (every vertex used by an even number of edges, as the edges of any rings, or what is left of
+/// several polygons' rings after edges used twice cancel). `Boundary` on an edge; otherwise the
+/// crossing parity of a ray from `p`, with the half-open rule of [`point_in_ring`].
+pub fn point_in_edge_cycles(edges: &[[DVec2; 2]], p: DVec2) -> Containment {
+    let mut inside = false;
+    for &[a, b] in edges {
+        if on_segment(a, b, p) {
+            return Containment::Boundary;
+        }
+        if (a.y > p.y) != (b.y > p.y) {
+            let o = orient(a, b, p);
+            let upward = b.y > a.y;
+            if (upward && o == Orientation::Ccw) || (!upward && o == Orientation::Cw) {
+                inside = !inside;
+            }
+        }
+    }
+    if inside {
+        Containment::Inside
+    } else {
+        Containment::Outside
+    }
+}
+
+/// Exact test: does the closed segment `[a, b]` (or the point `a` when `a == b`) meet the open
+/// interior of the convex polygon `poly` (counter-clockwise, non-degenerate)? Touching its
+/// boundary, or running along an edge, does not count.
+pub fn segment_meets_interior(a: DVec2, b: DVec2, poly: &[DVec2]) -> bool {
+    if a == b {
+        return point_in_convex(poly, a) == Containment::Inside;
+    }
+    !convex_interiors_disjoint(poly, &[a, b])
+}
+
 /// True when `p` lies on the closed segment `[a, b]`.
 pub fn on_segment(a: DVec2, b: DVec2, p: DVec2) -> bool {
     orient(a, b, p) == Orientation::Collinear

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use super::error::{LoadError, LoadErrorKind, Location};
 use super::{
-    decompose, footprint, json, obj, solid, Aabb3, Blocker, FileRead, FileStats, Footprint,
+    decompose, footprint, json, obj, solid, walls, Aabb3, Blocker, FileRead, FileStats, Footprint,
     NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene, SceneReport, Shape,
 };
 
@@ -221,14 +221,27 @@ fn build_object(index: u32, file: u32, raw: RawObject) -> Built {
             })
         }
         Shape::Mesh(mesh) => {
-            match solid::solid_pieces(&mesh) {
-                Ok(pieces) => blockers.extend(pieces.into_iter().map(|p| Blocker {
+            // Solid prisms where the mesh is closed, walls from its vertical faces in any case.
+            let solid = solid::solid_pieces(&mesh);
+            if let Ok(pieces) = &solid {
+                blockers.extend(pieces.iter().map(|p| Blocker {
                     object: index,
-                    polygon: p.polygon,
+                    polygon: p.polygon.clone(),
                     base: p.base,
                     top: p.top,
-                })),
-                Err(why) => no_blocker.push(why),
+                }));
+            }
+            blockers.extend(walls::wall_pieces(&mesh).into_iter().map(|w| Blocker {
+                object: index,
+                polygon: vec![w.a, w.b],
+                base: w.base,
+                top: w.top,
+            }));
+            if blockers.is_empty() {
+                no_blocker.push(match solid {
+                    Err(why) => why,
+                    Ok(_) => NoBlocker::NoProvableInterior,
+                });
             }
             Shape::Mesh(mesh)
         }

@@ -8,7 +8,9 @@
 //! - object indices follow input order across files, then order within each file;
 //! - all geometry after ingest is local (`world = local + origin`), origin chosen once in f64;
 //! - a blocker is a convex, counter-clockwise polygon with a base and a top, and the prism it
-//!   spans is certainly solid: a footprint prism, or space proven inside a closed mesh;
+//!   spans is certainly solid: a footprint prism, or space proven inside a closed mesh; or a
+//!   wall, a 2-vertex segment whose vertical rectangle from base to top certainly lies in the
+//!   faces of a mesh, closed or not ([`walls`]);
 //! - nothing here panics on bad input: readers return [`LoadError`].
 
 pub mod cityjson;
@@ -23,6 +25,7 @@ pub mod obj;
 pub mod solid;
 pub mod summary;
 pub mod walkable;
+pub mod walls;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -276,10 +279,11 @@ pub enum NoBlocker {
     },
     /// Top not above base.
     NoHeight,
-    /// The mesh is open: some edges are not shared by an even number of faces.
+    /// The mesh is open (some edges are not shared by an even number of faces), and no face of
+    /// it is vertical.
     OpenMesh { boundary_edges: usize },
-    /// The mesh is closed but no column of it could be proven solid (too thin, degenerate, or
-    /// every test point on a face edge).
+    /// No column of the mesh could be proven solid (too thin, degenerate, or every test point
+    /// on a face edge), and no face of it gives a wall.
     NoProvableInterior,
     /// The constrained triangulation refused the rings (should not happen after validation).
     Triangulation(String),
@@ -293,10 +297,13 @@ impl fmt::Display for NoBlocker {
             }
             NoBlocker::NoHeight => write!(f, "top not above base"),
             NoBlocker::OpenMesh { boundary_edges } => {
-                write!(f, "open mesh ({boundary_edges} edges not shared by an even number of faces): no provable interior")
+                write!(f, "open mesh ({boundary_edges} edges not shared by an even number of faces): no provable interior, and no vertical face gives a wall")
             }
             NoBlocker::NoProvableInterior => {
-                write!(f, "closed mesh, but no column could be proven solid")
+                write!(
+                    f,
+                    "no column could be proven solid, and no vertical face gives a wall"
+                )
             }
             NoBlocker::Triangulation(m) => write!(f, "triangulation failed: {m}"),
         }

@@ -19,7 +19,14 @@ pub struct Summary {
     pub blocker_objects: usize,
     /// Objects that gave none (they stay occludees).
     pub no_blocker_objects: usize,
+    /// All blockers: convex pieces (prisms) and walls (segments).
     pub convex_pieces: usize,
+    /// Of them, walls (2-vertex blockers, from vertical mesh faces).
+    pub walls: usize,
+    /// Objects that gave at least one prism (a convex piece of 3 or more vertices), and objects
+    /// that gave at least one wall.
+    pub prism_objects: usize,
+    pub wall_objects: usize,
     /// Footprint objects and mesh objects.
     pub footprint_objects: usize,
     pub mesh_objects: usize,
@@ -112,10 +119,18 @@ pub fn summarize(scene: &Scene) -> Summary {
         }
     };
     let mut has_blocker = vec![false; scene.objects.len()];
+    let mut has_prism = vec![false; scene.objects.len()];
+    let mut has_wall = vec![false; scene.objects.len()];
     for b in &scene.blockers {
         has_blocker[b.object as usize] = true;
+        if b.polygon.len() == 2 {
+            has_wall[b.object as usize] = true;
+        } else {
+            has_prism[b.object as usize] = true;
+        }
     }
-    let blocker_objects = has_blocker.iter().filter(|&&b| b).count();
+    let count = |v: &[bool]| v.iter().filter(|&&b| b).count();
+    let blocker_objects = count(&has_blocker);
 
     let mut skipped_by_reason = BTreeMap::new();
     let skipped: Vec<Entry> = scene
@@ -173,6 +188,13 @@ pub fn summarize(scene: &Scene) -> Summary {
         blocker_objects,
         no_blocker_objects: scene.objects.len() - blocker_objects,
         convex_pieces: scene.blockers.len(),
+        walls: scene
+            .blockers
+            .iter()
+            .filter(|b| b.polygon.len() == 2)
+            .count(),
+        prism_objects: count(&has_prism),
+        wall_objects: count(&has_wall),
         footprint_objects: scene
             .objects
             .iter()
