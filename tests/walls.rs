@@ -214,6 +214,11 @@ impl Rng {
 /// Rays through `rays` points of every wall blocker, in random directions (at least a
 /// milliradian off the wall's plane): (walls checked, rays that met no face near the wall).
 fn shoot(s: &Scene, rays: usize, seed: u64) -> (usize, usize, Vec<String>) {
+    shoot_with(s, rays, seed, true)
+}
+
+/// [`shoot`], by the caster's brute-force loop over every face or by its grid walk.
+fn shoot_with(s: &Scene, rays: usize, seed: u64, brute: bool) -> (usize, usize, Vec<String>) {
     let caster = Caster::new(s);
     let mut rng = Rng(seed | 1);
     let (mut walls, mut missed) = (0, 0);
@@ -237,7 +242,12 @@ fn shoot(s: &Scene, rays: usize, seed: u64) -> (usize, usize, Vec<String>) {
             let d = horiz.extend(slope).normalize();
             // The ray segment 5 cm either side of p must meet a face.
             let o = p - d * 0.05;
-            if caster.first_hit_brute(o, d, 0.1).is_none() {
+            let hit = if brute {
+                caster.first_hit_brute(o, d, 0.1)
+            } else {
+                caster.first_hit(o, d, 0.1)
+            };
+            if hit.is_none() {
                 missed += 1;
                 if first.len() < 3 {
                     first.push(format!("wall {w:?}: ray {o} dir {d} misses"));
@@ -265,6 +275,22 @@ proptest! {
             .map(|b| b.sides.iter().filter(|&&k| k <= 3).count())
             .sum::<usize>();
         prop_assert!(walls >= vertical_sides.min(1), "{walls} walls from {vertical_sides} vertical sides");
+    }
+}
+
+#[test]
+fn no_ray_passes_through_a_wall_of_the_bundled_meshes() {
+    // Every wall of Gelderseplein (3DBAG, open, triangulated) and of the triangulated Den Haag
+    // OBJ, 4 rays each.
+    for (rel, min_walls) in [
+        ("data/gelderseplein/gelderseplein.obj", 2000),
+        ("data/denhaag/DenHaag_01_buildings.obj", 10000),
+    ] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
+        let s = scene::load(&[path], &ReadOptions::default()).unwrap();
+        let (walls, missed, first) = shoot_with(&s, 4, 11, false);
+        assert!(walls >= min_walls, "{rel}: {walls} walls");
+        assert_eq!(missed, 0, "{rel}: {first:?}");
     }
 }
 
