@@ -169,7 +169,7 @@ fn gelderseplein_obj_groups_are_objects() {
     // Every 3D group of every building gives walls; 77 also give solid prisms (4 LoD groups
     // are open above their base).
     assert_eq!(counts(&s), (105, 81, 24, 0, 0));
-    assert_eq!((s.with_prisms, s.with_walls, s.walls), (77, 81, 5545));
+    assert_eq!((s.with_prisms, s.with_walls, s.walls), (77, 81, 2631));
     for o in &scene.objects {
         let flat = o.bbox.max.z == o.bbox.min.z;
         let walls = scene
