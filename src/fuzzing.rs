@@ -218,6 +218,10 @@ mod scene_targets {
                 "object {i}: box {b:?}"
             );
         }
+        assert!(
+            s.objects.windows(2).all(|w| w[0].feature < w[1].feature),
+            "input feature numbers out of order"
+        );
         let mut last = 0;
         for (k, b) in s.blockers.iter().enumerate() {
             assert!(

@@ -4,7 +4,7 @@
 mod common;
 
 use common::repo;
-use vocc::scene::{self, LoadError, LoadErrorKind, Location, ReadOptions};
+use vocc::scene::{self, LoadError, LoadErrorKind, Location, OnBadHeight, ReadOptions};
 
 fn load_broken(name: &str) -> LoadError {
     let path = repo(&format!("tests/fixtures/broken/{name}"));
@@ -57,10 +57,156 @@ fn height_attribute_missing_from_every_feature() {
 }
 
 #[test]
-fn height_that_is_not_a_number() {
-    let e = load_broken("geojson_height_not_a_number.geojson");
+fn height_that_is_not_a_number_fails_under_on_bad_height_error() {
+    let path = repo("tests/fixtures/broken/geojson_height_not_a_number.geojson");
+    let opts = ReadOptions {
+        height_attr: Some("height".into()),
+        on_bad_height: OnBadHeight::Error,
+        ..ReadOptions::default()
+    };
+    let e = scene::load(std::slice::from_ref(&path), &opts).expect_err("must not load");
     assert!(matches!(&e.kind, LoadErrorKind::BadAttribute { attr, .. } if attr == "height"));
     assert_eq!(e.location, Location::Feature(1));
+    assert!(
+        e.to_string()
+            .contains(r#"feature 1: attribute "height" has value "tall""#),
+        "{e}"
+    );
+    // By default the feature is skipped, with its reason, and the other one loads.
+    let s = scene::load(
+        &[path],
+        &ReadOptions {
+            on_bad_height: OnBadHeight::Skip,
+            ..opts
+        },
+    )
+    .unwrap();
+    assert_eq!(s.objects.len(), 1);
+    assert_eq!(
+        s.report.skipped[0].1.reason.to_string(),
+        r#"height attribute "height" is "tall", not a number"#
+    );
+}
+
+/// `tests/fixtures/scenes/messy_heights.geojson`: one feature per case (its `what` property).
+fn messy(opts: ReadOptions) -> Result<scene::Scene, LoadError> {
+    let path = repo("tests/fixtures/scenes/messy_heights.geojson");
+    scene::load(
+        &[path],
+        &ReadOptions {
+            height_attr: Some("height".into()),
+            levels_attr: Some("levels".into()),
+            ..opts
+        },
+    )
+}
+
+#[test]
+fn messy_heights_parse_where_their_meaning_is_clear() {
+    let s = messy(ReadOptions::default()).unwrap();
+    let height = |f: u32| {
+        let o = s.objects.iter().find(|o| o.feature == f)?;
+        match &o.shape {
+            scene::Shape::Footprint(fp) => Some(fp.top - fp.base),
+            _ => None,
+        }
+    };
+    assert_eq!(height(0), Some(10.0), "a number");
+    assert_eq!(height(1), Some(12.13), "\"12.13 m\"");
+    assert_eq!(height(2), Some(12.5), "\"12,5\"");
+    assert!((height(3).unwrap() - 12.192).abs() < 1e-9, "\"40 ft\"");
+    assert_eq!(height(4), Some(9.0), "bad height: 3 storeys of 3 m");
+    assert_eq!(height(6), Some(12.0), "no height: \"4\" storeys");
+    assert_eq!(
+        height(9),
+        Some(9.0),
+        "the height, the bad storey count unread"
+    );
+    // Skipped, each with its reason, by input feature number.
+    let skipped: Vec<(u32, String)> = s
+        .report
+        .skipped
+        .iter()
+        .map(|(_, k)| (k.feature, k.reason.to_string()))
+        .collect();
+    assert_eq!(
+        skipped,
+        vec![
+            (
+                5,
+                r#"height attribute "height" is "tall", not a number"#.to_string()
+            ),
+            (7, "no height attribute and no storey count".to_string()),
+            (
+                8,
+                r#"height attribute "height" is "1,234", not a number"#.to_string()
+            ),
+        ]
+    );
+    // The fallbacks are reported too.
+    let fallbacks: Vec<(u32, String)> = s
+        .report
+        .height_fallbacks
+        .iter()
+        .map(|(i, f)| (s.objects[*i as usize].feature, f.to_string()))
+        .collect();
+    assert_eq!(
+        fallbacks,
+        vec![
+            (
+                4,
+                r#"height from the storey count; "height" is "tall", not a number"#.to_string()
+            ),
+            (6, "height from the storey count".to_string()),
+        ]
+    );
+}
+
+#[test]
+fn messy_heights_fall_back_to_the_default_height_or_stop_at_the_first_bad_value() {
+    let s = messy(ReadOptions {
+        default_height: Some(6.0),
+        ..ReadOptions::default()
+    })
+    .unwrap();
+    assert_eq!(s.objects.len(), 10);
+    assert!(s.report.skipped.is_empty());
+    let defaults: Vec<u32> = s
+        .report
+        .height_fallbacks
+        .iter()
+        .filter(|(_, f)| f.source == scene::HeightSource::Default)
+        .map(|(i, _)| s.objects[*i as usize].feature)
+        .collect();
+    assert_eq!(defaults, vec![5, 7, 8]);
+    let e = messy(ReadOptions {
+        on_bad_height: OnBadHeight::Error,
+        ..ReadOptions::default()
+    })
+    .unwrap_err();
+    assert_eq!(e.location, Location::Feature(4));
+    assert_eq!(
+        e.kind,
+        LoadErrorKind::BadAttribute {
+            attr: "height".into(),
+            value: "\"tall\"".into()
+        }
+    );
+}
+
+#[test]
+fn a_default_height_alone_reads_geojson_without_height_attributes() {
+    let path = repo("tests/fixtures/scenes/messy_heights.geojson");
+    let s = scene::load(
+        &[path],
+        &ReadOptions {
+            default_height: Some(4.0),
+            ..ReadOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(s.objects.len(), 10);
+    assert_eq!(s.report.height_fallbacks.len(), 10);
 }
 
 #[test]

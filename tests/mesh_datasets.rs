@@ -191,3 +191,114 @@ fn gelderseplein_obj_groups_are_objects() {
     assert!(lines.windows(2).all(|w| w[0] < w[1]));
     assert_eq!(lines[0], 10904);
 }
+
+// ---- CityJSON versions and types (fixtures in tests/fixtures/cityjson/) ----
+
+fn fixture(name: &str, types: &[&str]) -> Result<Scene, vocc::scene::LoadError> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/cityjson")
+        .join(name);
+    load(
+        &[p],
+        &ReadOptions {
+            types: types.iter().map(|t| t.to_string()).collect(),
+            ..ReadOptions::default()
+        },
+    )
+}
+
+#[test]
+fn cityjson_versions_from_0_3_to_2_0_load_and_others_are_refused() {
+    // 0.3, the oldest read: no transform, an integer LoD, semantics as a list.
+    let s = fixture("building_v0_3.json", &[]).unwrap();
+    assert_eq!(s.objects.len(), 1);
+    assert!(s.blockers.iter().any(|b| b.polygon.len() == 2));
+    assert!(s.blockers.iter().any(|b| b.polygon.len() > 2));
+    for (name, v) in [("building_v0_2.json", "0.2"), ("building_v2_1.json", "2.1")] {
+        let e = fixture(name, &[]).unwrap_err();
+        assert_eq!(
+            e.kind,
+            vocc::scene::LoadErrorKind::UnsupportedVersion(v.into())
+        );
+        assert!(
+            e.to_string().ends_with(&format!(
+                "unsupported CityJSON version \"{v}\" (this reader knows 0.3 to 0.9, 1.0, 1.1, 2.0)"
+            )),
+            "{e}"
+        );
+    }
+    // 1.0, 1.1 and 2.0 are the bundled Delft (2.0) and the fixtures below (1.1, 2.0).
+}
+
+#[test]
+fn cityjson_without_buildings_says_which_types_it_holds() {
+    // Like the specification's simplegeom files: a cube, a block with a hole through it, two
+    // cubes as one composite solid, each a +GenericCityObject.
+    for (name, walls) in [
+        ("generic_cube_v1_1.json", 4),
+        ("generic_torus_v1_1.json", 8),
+        ("composite_solid_v1_1.json", 5),
+    ] {
+        let e = fixture(name, &[]).unwrap_err();
+        assert!(
+            e.to_string().ends_with(
+                "no city object of the types read (Building, BuildingPart); the files hold \
+                 +GenericCityObject 1; read them with --types +GenericCityObject"
+            ),
+            "{e}"
+        );
+        let s = fixture(name, &["+GenericCityObject"]).unwrap();
+        assert_eq!(s.objects.len(), 1, "{name}");
+        let w = s.blockers.iter().filter(|b| b.polygon.len() == 2).count();
+        assert_eq!(w, walls, "{name}");
+        assert!(
+            s.blockers.iter().any(|b| b.polygon.len() > 2),
+            "{name}: no prism"
+        );
+    }
+}
+
+#[test]
+fn cityjson_types_add_bridges_constructions_and_extension_types() {
+    let all = [
+        "Bridge",
+        "OtherConstruction",
+        "GenericCityObject",
+        "+GenericCityObject",
+    ];
+    let s = fixture("mixed_types_v2_0.json", &[]).unwrap();
+    assert_eq!(s.objects.len(), 1);
+    let other = &s.report.files[0].other_types;
+    for t in all {
+        assert_eq!(other.get(t), Some(&1), "{t}");
+    }
+    let s = fixture("mixed_types_v2_0.json", &all).unwrap();
+    let names: Vec<&str> = s.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["b1", "bridge", "shed", "kiosk", "tower"]);
+    // Feature numbers follow the file's city objects, whatever is read.
+    let features: Vec<u32> = s.objects.iter().map(|o| o.feature).collect();
+    assert_eq!(features, [0, 1, 2, 3, 4]);
+    let s = fixture("mixed_types_v2_0.json", &["+GenericCityObject"]).unwrap();
+    let features: Vec<u32> = s.objects.iter().map(|o| o.feature).collect();
+    assert_eq!(features, [0, 4]);
+    assert_eq!(s.report.files[0].other_types.get("Road"), Some(&1));
+}
+
+#[test]
+fn the_results_table_of_blocker_shares_is_measured() {
+    // The table docs/RESULTS.md carries (vocc results), on two of the datasets.
+    let md = vocc::eval::report::blocker_share_section(&[
+        ("Gelderseplein", data("gelderseplein/gelderseplein.obj")),
+        ("Delft", data("delft/delft_buildings.obj")),
+    ])
+    .unwrap();
+    eprintln!("{md}");
+    assert!(
+        md.contains("| 105 | 77 (73.3%) | 81 (77.1%) | 2631 |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| 160 | 160 (100.0%) | 160 (100.0%) | 1601 |"),
+        "{md}"
+    );
+}

@@ -56,6 +56,7 @@ fn read_options(
         levels_attr,
         storey_height,
         lod,
+        ..ReadOptions::default()
     }
 }
 

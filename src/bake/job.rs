@@ -144,7 +144,7 @@ impl SceneCounts {
     pub fn of(scene: &Scene) -> SceneCounts {
         let mut skipped_by_reason = BTreeMap::new();
         for (_, s) in &scene.report.skipped {
-            *skipped_by_reason.entry(s.reason.to_string()).or_insert(0) += 1;
+            *skipped_by_reason.entry(s.reason.label()).or_insert(0) += 1;
         }
         let mut no_blocker_by_reason = BTreeMap::new();
         for (_, why) in &scene.report.no_blocker {

@@ -9,7 +9,7 @@ use clap::Args;
 
 use vocc::bake::pipeline::{Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
 use vocc::runtime::frame::MAX_VOS_PER_CELL;
-use vocc::scene::ReadOptions;
+use vocc::scene::{OnBadHeight, ReadOptions};
 
 /// Options of the scene readers.
 #[derive(Args, Clone, Debug)]
@@ -29,6 +29,26 @@ pub struct ReadArgs {
     /// CityJSON: level of detail to read (default: the highest each object has).
     #[arg(long)]
     pub lod: Option<String>,
+    /// GeoJSON: a height, storey or base value that is not a number ("12.13 m" and "12,5" are
+    /// numbers; "tall" is not): `skip` tries the storey count, then --default-height, and
+    /// otherwise skips the feature, counted with its reason; `error` stops the load there.
+    #[arg(long, value_enum, default_value_t = OnBadHeightArg::Skip, value_name = "skip|error")]
+    pub on_bad_height: OnBadHeightArg,
+    /// GeoJSON: height of a feature with no usable height or storey count, metres (the last
+    /// fallback; default: such features are skipped).
+    #[arg(long, value_name = "M", value_parser = parse_positive, allow_hyphen_values = true)]
+    pub default_height: Option<f64>,
+    /// CityJSON: also read these city object types, besides Building and BuildingPart
+    /// (comma-separated, as the file writes them: Bridge,OtherConstruction,+GenericCityObject).
+    #[arg(long, value_delimiter = ',', value_name = "TYPE,...")]
+    pub types: Vec<String>,
+}
+
+/// `--on-bad-height`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnBadHeightArg {
+    Skip,
+    Error,
 }
 
 impl ReadArgs {
@@ -39,6 +59,12 @@ impl ReadArgs {
             levels_attr: self.levels_attr.clone(),
             storey_height: self.storey_height,
             lod: self.lod.clone(),
+            on_bad_height: match self.on_bad_height {
+                OnBadHeightArg::Skip => OnBadHeight::Skip,
+                OnBadHeightArg::Error => OnBadHeight::Error,
+            },
+            default_height: self.default_height,
+            types: self.types.iter().map(|t| t.trim().to_string()).collect(),
         }
     }
 }

@@ -286,6 +286,20 @@ fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
         sum.bytes_per_cell,
         g.cells
     );
+    let sc = &sum.scene;
+    if sc.skipped > 0 {
+        let why: Vec<String> = sc
+            .skipped_by_reason
+            .iter()
+            .map(|(k, v)| format!("{v} {k}"))
+            .collect();
+        eprintln!(
+            "scene: {} objects; {} skipped ({}; vocc info lists each)",
+            sc.objects,
+            sc.skipped,
+            why.join(", ")
+        );
+    }
 }
 
 #[cfg(test)]

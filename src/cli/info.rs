@@ -107,7 +107,8 @@ fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<
             writeln!(out, "  {v:>6}  {k}")?;
         }
         for e in entries.iter().take(LIST) {
-            let obj = e.object.map(|i| format!("#{i} ")).unwrap_or_default();
+            // Objects and skips alike by input feature number (the numbers `pvs` prints).
+            let obj = format!("#{} ", e.feature);
             writeln!(
                 out,
                 "    {obj}{:?} ({}, {}): {}",
@@ -124,6 +125,14 @@ fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<
         Ok(())
     };
     section(out, "skipped objects", &s.skipped_by_reason, &s.skipped)?;
+    if !s.height_fallbacks.is_empty() {
+        section(
+            out,
+            "heights from a fallback",
+            &s.height_fallbacks_by_source,
+            &s.height_fallbacks,
+        )?;
+    }
     // Repairs move no point; counts are enough here, and --json lists each one.
     writeln!(
         out,

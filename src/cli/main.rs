@@ -68,7 +68,9 @@ enum Command {
         /// The cell holding this world position X,Y.
         #[arg(long, value_name = "X,Y", value_parser = parse_xy, allow_hyphen_values = true)]
         at: Option<(f64, f64)>,
-        /// Print {"cell": ID, "objects": N, "pvs": [object indices in input order]}.
+        /// Print {"cell": ID, "objects": N, "pvs": [input feature numbers, ascending]}: the
+        /// GeoJSON feature index (CityJSON city object, OBJ group), counted across the files in
+        /// order with skipped ones included, as `vocc info` numbers them.
         #[arg(long)]
         json: bool,
     },

@@ -128,7 +128,19 @@ fn scene_boxes(
     files: &[PathBuf],
     read: &ReadArgs,
 ) -> Result<(usize, BoxTree)> {
+    let (n, tree, _) = scene_boxes_and_features(store, store_path, files, read)?;
+    Ok((n, tree))
+}
+
+/// [`scene_boxes`], with each object's input feature number (by object index).
+fn scene_boxes_and_features(
+    store: &Store,
+    store_path: &Path,
+    files: &[PathBuf],
+    read: &ReadArgs,
+) -> Result<(usize, BoxTree, Vec<u32>)> {
     let s = scene::load(files, &read.options())?;
+    let features: Vec<u32> = s.objects.iter().map(|ob| ob.feature).collect();
     let o = s.origin;
     let world: Vec<[f64; 6]> = s
         .objects
@@ -160,7 +172,7 @@ fn scene_boxes(
             e.max.y + o.y
         );
     }
-    Ok((world.len(), BoxTree::from_world(&world, f.origin)))
+    Ok((world.len(), BoxTree::from_world(&world, f.origin), features))
 }
 
 /// `inspect --cells`: one row per cell.
@@ -444,11 +456,16 @@ pub fn pvs(
     let store = parse(&path, &bytes)?;
     let id = which_cell(&store, cell, at)?;
     let rec = store.cell(id)?;
-    let (objects, tree) = scene_boxes(&store, &path, &scene_files, read)?;
+    let (objects, tree, features) = scene_boxes_and_features(&store, &path, &scene_files, read)?;
     let mut visible = Vec::new();
     let t = Instant::now();
     let st = pvs_with_stats(store.frame(), id, &rec, &tree, &mut visible);
     let us = t.elapsed().as_secs_f64() * 1e6;
+    // Input feature numbers, so that an object has the same number whatever was skipped.
+    let visible: Vec<u32> = visible
+        .iter()
+        .map(|&i| features.get(i as usize).copied().unwrap_or(i))
+        .collect();
     let mut out = std::io::stdout().lock();
     if as_json {
         serde_json::to_writer(

@@ -1,6 +1,8 @@
-//! CityJSON reader (versions 0.x, 1.x and 2.x).
+//! CityJSON reader (versions 0.3 to 0.9, 1.0, 1.1 and 2.0: [`SUPPORTED_VERSIONS`]).
 //!
 //! Input: a parsed CityJSON document. Output: one [`RawObject`] per `Building` or `BuildingPart`
+//! (and per object of the types `ReadOptions::types` adds, such as `Bridge` or an extension's
+//! `+GenericCityObject`)
 //! that has geometry at the chosen level of detail, in the file order of `CityObjects`; each is a
 //! [`Mesh`] in world f64 coordinates (`transform` applied) over only its own vertices, one
 //! [`Face`] per surface with its rings (ring 0 outer, the rest holes).
@@ -60,12 +62,7 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
             ))
         }
     };
-    let major = version.split('.').next().unwrap_or("");
-    if !matches!(major, "0" | "1" | "2")
-        || version
-            .split('.')
-            .any(|p| p.is_empty() || !p.bytes().all(|b| b.is_ascii_digit()))
-    {
+    if !supported_version(&version) {
         return Err(err(
             Location::File,
             LoadErrorKind::UnsupportedVersion(version),
@@ -142,14 +139,18 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
     };
 
     let wanted_lod = opts.lod.as_deref();
-    let mut out = FileRead::default();
-    for (id, obj) in city_objects {
+    let mut out = FileRead {
+        items: city_objects.len(),
+        ..FileRead::default()
+    };
+    for (item, (id, obj)) in city_objects.iter().enumerate() {
+        let feature = item as u32;
         let at = || Location::CityObject(id.clone());
         let ty = obj
             .get("type")
             .and_then(|t| t.as_str())
             .unwrap_or("(no type)");
-        if ty != "Building" && ty != "BuildingPart" {
+        if ty != "Building" && ty != "BuildingPart" && !opts.types.iter().any(|t| t == ty) {
             *out.other_types.entry(ty.to_string()).or_default() += 1;
             continue;
         }
@@ -208,6 +209,8 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
             out.skipped.push(Skipped {
                 location: at(),
                 name: id.clone(),
+                feature,
+                outline: Vec::new(),
                 reason,
             });
             continue;
@@ -234,6 +237,8 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
             out.skipped.push(Skipped {
                 location: at(),
                 name: id.clone(),
+                feature,
+                outline: Vec::new(),
                 reason: SkipReason::NoGeometryAtLod(wanted_lod.unwrap_or("").to_string()),
             });
             continue;
@@ -253,6 +258,8 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
             out.skipped.push(Skipped {
                 location: at(),
                 name: id.clone(),
+                feature,
+                outline: Vec::new(),
                 reason: SkipReason::EmptyGeometry,
             });
             continue;
@@ -260,10 +267,34 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
         out.objects.push(RawObject {
             name: id.clone(),
             location: at(),
+            feature,
             shape: Shape::Mesh(b.mesh),
         });
     }
     Ok(out)
+}
+
+/// The versions this reader knows, as `MAJOR.MINOR` with an optional patch number: 0.3 to 0.9
+/// (the oldest tested is 0.3, `tests/fixtures/cityjson/`), 1.0, 1.1 and 2.0. What the reader
+/// uses (`CityObjects`, `vertices`, `transform`, geometry `type`, `lod` and `boundaries`) kept
+/// its layout through all of them; older drafts and newer versions are refused.
+pub const SUPPORTED_VERSIONS: &str = "0.3 to 0.9, 1.0, 1.1, 2.0";
+
+fn supported_version(v: &str) -> bool {
+    let parts: Vec<&str> = v.split('.').collect();
+    if parts.len() < 2
+        || parts.len() > 3
+        || parts
+            .iter()
+            .any(|p| p.is_empty() || p.len() > 4 || !p.bytes().all(|b| b.is_ascii_digit()))
+    {
+        return false;
+    }
+    let (major, minor): (u32, u32) = match (parts[0].parse(), parts[1].parse()) {
+        (Ok(a), Ok(b)) => (a, b),
+        _ => return false,
+    };
+    matches!((major, minor), (0, 3..=9) | (1, 0) | (1, 1) | (2, 0))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

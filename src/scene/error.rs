@@ -72,15 +72,36 @@ pub enum LoadErrorKind {
     /// GeoJSON footprints carry no height, and no attribute to read one from was named.
     #[error("GeoJSON footprints need a height: give --height-attr NAME (or --levels-attr NAME for storey counts)")]
     NoHeightOption,
-    #[error("attribute {attr:?} has value {value}, which is not a number")]
+    #[error("attribute {attr:?} has value {value}, which is not a number (a number may carry a unit, as \"12.13 m\" or \"40 ft\", or a decimal comma, as \"12,5\"); --on-bad-height skip passes over such values")]
     BadAttribute { attr: String, value: String },
-    #[error("unsupported CityJSON version {0:?} (supported: 0.x, 1.x, 2.x)")]
+    #[error("unsupported CityJSON version {0:?} (this reader knows {known})", known = super::cityjson::SUPPORTED_VERSIONS)]
     UnsupportedVersion(String),
     #[error("the scene has no objects")]
     NoObjects,
+    /// CityJSON files with city objects, none of a type read: the types they hold, and how many.
+    #[error("no city object of the types read ({}); the files hold {}{}", read.join(", "), held.iter().map(|(t, n)| format!("{t} {n}")).collect::<Vec<_>>().join(", "), types_hint(held))]
+    NoObjectsOfTypes {
+        read: Vec<String>,
+        held: Vec<(String, usize)>,
+    },
     /// Every object was skipped for want of geometry at the requested level of detail.
     #[error("no object has geometry at LoD {lod}; the files hold LoD {}", available.join(", "))]
     NoObjectsAtLod { lod: String, available: Vec<String> },
+}
+
+/// The `--types` that would read the held types (those a reader could read: not the notes on
+/// buildings whose geometry lies in their parts).
+fn types_hint(held: &[(String, usize)]) -> String {
+    let t: Vec<&str> = held
+        .iter()
+        .map(|(t, _)| t.as_str())
+        .filter(|t| !t.contains(' '))
+        .collect();
+    if t.is_empty() {
+        String::new()
+    } else {
+        format!("; read them with --types {}", t.join(","))
+    }
 }
 
 /// A reader error: the file, the place in it, and what is wrong.

@@ -5,9 +5,12 @@
 //! positions (z is ignored), and the attribute names to read.
 //! Output: one footprint object per feature, in feature order, in world coordinates:
 //! `base` = the base attribute (0 when none is named), `top` = base + height, where height is the
-//! height attribute, or the storey attribute times the storey height when the height is missing.
-//! Features without either are skipped and reported, as are features whose geometry is null or
-//! has no area.
+//! height attribute, else the storey attribute times the storey height, else the default height
+//! (`ReadOptions::default_height`), each read by [`super::attr`] (units and decimal commas where
+//! the meaning is clear). A value that is not a number is passed over and noted, or fails the
+//! load (`ReadOptions::on_bad_height`). Features with no height are skipped with their reason
+//! and outline, as are features whose geometry is null or has no area; heights from a fallback
+//! are reported (`FileRead::fallbacks`).
 //! Invariants: every coordinate is range-checked where it enters; errors name the feature index;
 //! an unknown geometry type is an error, not a skip; memory holds one feature's JSON at a time.
 
@@ -19,7 +22,10 @@ use serde::Deserialize;
 use serde_json::{Map, Value};
 
 use super::error::{check_coord, LoadError, LoadErrorKind, Location};
-use super::{FileRead, Footprint, RawObject, ReadOptions, Ring, Shape, SkipReason, Skipped};
+use super::{
+    attr, FileRead, Footprint, HeightFallback, HeightSource, OnBadHeight, RawObject, ReadOptions,
+    Ring, Shape, SkipReason, Skipped,
+};
 
 /// One feature as parsed; coordinates are kept as a tree of numbers until the geometry type says
 /// how deep it must be.
@@ -90,7 +96,8 @@ pub struct GeoJsonReader<'a> {
 impl<'a> GeoJsonReader<'a> {
     /// Fails at once when no height source is named: GeoJSON footprints carry no height.
     pub fn new(path: &'a Path, opts: &'a ReadOptions) -> Result<Self, LoadError> {
-        if opts.height_attr.is_none() && opts.levels_attr.is_none() {
+        if opts.height_attr.is_none() && opts.levels_attr.is_none() && opts.default_height.is_none()
+        {
             return Err(LoadError::new(
                 path,
                 Location::File,
@@ -122,21 +129,24 @@ impl<'a> GeoJsonReader<'a> {
     }
 
     fn skip(&mut self, i: usize, name: &str, reason: SkipReason) {
+        self.skip_with(i, name, reason, Vec::new());
+    }
+
+    /// [`Self::skip`], keeping the feature's rings for pictures.
+    fn skip_with(&mut self, i: usize, name: &str, reason: SkipReason, outline: Vec<Ring>) {
         self.out.skipped.push(Skipped {
             location: Location::Feature(i),
             name: name.to_string(),
             reason,
+            feature: i as u32,
+            outline,
         });
     }
 
     /// Skips a feature for its geometry. Its height attribute still counts as seen, so a file
     /// whose features all lack usable geometry reports that (no objects), not a missing height.
     fn skip_geometry(&mut self, i: usize, name: &str, props: &Map<String, Value>, why: SkipReason) {
-        let numeric = |v: Option<&Value>| match v {
-            Some(Value::Number(_)) => true,
-            Some(Value::String(s)) => s.trim().parse::<f64>().is_ok(),
-            _ => false,
-        };
+        let numeric = |v: Option<&Value>| matches!(attr::metres(v), attr::Value::Number(_));
         let attrs = [&self.opts.height_attr, &self.opts.levels_attr];
         self.saw_height |= attrs.into_iter().flatten().any(|a| numeric(props.get(a)));
         self.skip(i, name, why);
@@ -206,52 +216,90 @@ impl<'a> GeoJsonReader<'a> {
             return Ok(());
         }
 
-        let number = |attr: &str| -> Result<Option<f64>, LoadError> {
-            match props.get(attr) {
-                None | Some(Value::Null) => Ok(None),
-                Some(Value::Number(n)) => Ok(n.as_f64()),
-                Some(Value::String(s)) if s.trim().is_empty() => Ok(None),
-                Some(Value::String(s)) if s.trim().parse::<f64>().is_ok() => {
-                    Ok(s.trim().parse::<f64>().ok())
-                }
-                Some(other) => Err(self.err(
-                    i,
-                    LoadErrorKind::BadAttribute {
-                        attr: attr.to_string(),
-                        value: other.to_string(),
-                    },
-                )),
+        // A value that is not a number: an error, or passed over (noted) under the skip rule.
+        let on_bad = self.opts.on_bad_height;
+        let bad = |attr: &str, value: String| {
+            self.err(
+                i,
+                LoadErrorKind::BadAttribute {
+                    attr: attr.to_string(),
+                    value,
+                },
+            )
+        };
+        let mut passed: Vec<(String, String)> = Vec::new();
+        let take = |passed: &mut Vec<(String, String)>,
+                    attr: &str,
+                    v: attr::Value|
+         -> Result<Option<f64>, LoadError> {
+            match v {
+                attr::Value::Number(x) => Ok(Some(x)),
+                attr::Value::Missing => Ok(None),
+                attr::Value::Bad(value) => match on_bad {
+                    OnBadHeight::Error => Err(bad(attr, value)),
+                    OnBadHeight::Skip => {
+                        passed.push((attr.to_string(), value));
+                        Ok(None)
+                    }
+                },
             }
         };
-        let height = match &self.opts.height_attr {
-            Some(a) => number(a)?,
+        // Height: the height attribute, else storeys times the storey height, else the
+        // default height.
+        let mut source = None;
+        let mut height = match &self.opts.height_attr {
+            Some(a) => take(&mut passed, a, attr::metres(props.get(a)))?,
             None => None,
         };
-        let height = match (height, &self.opts.levels_attr) {
-            (Some(h), _) => Some(h),
-            (None, Some(a)) => number(a)?.map(|n| n * self.opts.storey_height),
-            (None, None) => None,
-        };
+        if height.is_none() {
+            if let Some(a) = &self.opts.levels_attr {
+                height = take(&mut passed, a, attr::count(props.get(a)))?
+                    .map(|n| n * self.opts.storey_height);
+                source = height.map(|_| HeightSource::Storeys);
+            }
+        }
+        if height.is_none() {
+            height = self.opts.default_height;
+            source = height.map(|_| HeightSource::Default);
+        }
+        let passed_height = passed.clone();
         let base = match &self.opts.base_attr {
             None => Some(0.0),
-            Some(a) => number(a)?,
+            Some(a) => take(&mut passed, a, attr::metres(props.get(a)))?,
         };
         let (Some(height), Some(base)) = (height, base) else {
-            let reason = if height.is_none() {
-                SkipReason::NoHeight
-            } else {
-                SkipReason::NoBase
+            let reason = match (height.is_none(), self.opts.base_attr.as_deref()) {
+                (true, _) => match passed_height.into_iter().next() {
+                    Some((attr, value)) => SkipReason::BadHeight { attr, value },
+                    None => SkipReason::NoHeight,
+                },
+                (false, Some(a)) => match passed.into_iter().find(|(x, _)| x == a) {
+                    Some((attr, value)) => SkipReason::BadBase { attr, value },
+                    None => SkipReason::NoBase,
+                },
+                (false, None) => SkipReason::NoBase,
             };
             self.saw_height |= height.is_some();
-            self.skip(i, &name, reason);
+            let outline = polygons.into_iter().flatten().collect();
+            self.skip_with(i, &name, reason, outline);
             return Ok(());
         };
+        if let Some(source) = source {
+            self.out.fallbacks.push((
+                self.out.objects.len(),
+                HeightFallback {
+                    source,
+                    passed: passed_height,
+                },
+            ));
+        }
         check_coord(height, "height").map_err(|k| self.err(i, k))?;
         check_coord(base, "base").map_err(|k| self.err(i, k))?;
         self.saw_height = true;
         self.out.objects.push(RawObject {
             name,
             location: Location::Feature(i),
+            feature: i as u32,
             shape: Shape::Footprint(Footprint {
                 polygons,
                 base,
@@ -263,7 +311,8 @@ impl<'a> GeoJsonReader<'a> {
 
     /// Ends the file. Fails when features exist but none had a usable height: the attribute
     /// name is almost certainly wrong.
-    pub fn finish(self) -> Result<FileRead, LoadError> {
+    pub fn finish(mut self) -> Result<FileRead, LoadError> {
+        self.out.items = self.features;
         if !self.saw_height && self.features > 0 {
             let attr = self
                 .opts

@@ -63,7 +63,12 @@ pub fn load(paths: &[PathBuf], opts: &ReadOptions) -> Result<Scene, LoadError> {
         .par_iter()
         .map(|p| read_file(p, opts))
         .collect::<Result<_, _>>()?;
-    build_scene(paths.to_vec(), reads, t.elapsed().as_secs_f64())
+    build_scene(
+        paths.to_vec(),
+        reads,
+        t.elapsed().as_secs_f64(),
+        &opts.types,
+    )
 }
 
 /// [`load`] from bytes already in memory: `(path, bytes)` per file, in order. Each path chooses
@@ -77,7 +82,7 @@ pub fn load_bytes(files: &[(PathBuf, &[u8])], opts: &ReadOptions) -> Result<Scen
         .map(|(p, b)| read_bytes(p, b, opts))
         .collect::<Result<_, _>>()?;
     let paths = files.iter().map(|(p, _)| p.clone()).collect();
-    build_scene(paths, reads, t.elapsed().as_secs_f64())
+    build_scene(paths, reads, t.elapsed().as_secs_f64(), &opts.types)
 }
 
 /// Everything after reading: the local frame, then per-object repair, decomposition and solids.
@@ -85,6 +90,7 @@ fn build_scene(
     paths: Vec<PathBuf>,
     reads: Vec<(FileRead, &'static str)>,
     read_secs: f64,
+    types: &[String],
 ) -> Result<Scene, LoadError> {
     let mut report = SceneReport::default();
     report.timings.push(("read", read_secs));
@@ -92,7 +98,16 @@ fn build_scene(
     let t = Instant::now();
     let mut raw: Vec<(u32, RawObject)> = Vec::new();
     let mut lods = std::collections::BTreeSet::new();
-    for (fi, ((read, format), path)) in reads.into_iter().zip(&paths).enumerate() {
+    // Input feature numbers: each file's items follow the previous files'.
+    let mut offset: u32 = 0;
+    for (fi, ((mut read, format), path)) in reads.into_iter().zip(&paths).enumerate() {
+        for o in &mut read.objects {
+            o.feature = o.feature.saturating_add(offset);
+        }
+        for s in &mut read.skipped {
+            s.feature = s.feature.saturating_add(offset);
+        }
+        offset = offset.saturating_add(read.items.min(u32::MAX as usize) as u32);
         lods.extend(read.lods);
         report.files.push(FileStats {
             path: path.clone(),
@@ -104,6 +119,12 @@ fn build_scene(
         report
             .skipped
             .extend(read.skipped.into_iter().map(|s| (fi as u32, s)));
+        let first = raw.len() as u32;
+        report.height_fallbacks.extend(
+            read.fallbacks
+                .into_iter()
+                .map(|(k, f)| (first + k as u32, f)),
+        );
         raw.extend(read.objects.into_iter().map(|o| (fi as u32, o)));
     }
     if raw.is_empty() {
@@ -117,11 +138,26 @@ fn build_scene(
             .skipped
             .iter()
             .all(|(_, s)| matches!(s.reason, super::SkipReason::NoGeometryAtLod(_)));
+        // CityJSON city objects there are, but none of a type read: say which types there are.
+        let mut held: std::collections::BTreeMap<String, usize> = Default::default();
+        for f in &report.files {
+            for (t, n) in &f.other_types {
+                *held.entry(t.clone()).or_default() += n;
+            }
+        }
         let kind = match wanted {
             Some(lod) if all_lod && !lods.is_empty() => LoadErrorKind::NoObjectsAtLod {
                 lod,
                 available: lods.into_iter().collect(),
             },
+            _ if report.skipped.is_empty() && !held.is_empty() => {
+                let mut read = vec!["Building".to_string(), "BuildingPart".to_string()];
+                read.extend(types.iter().cloned());
+                LoadErrorKind::NoObjectsOfTypes {
+                    read,
+                    held: held.into_iter().collect(),
+                }
+            }
             _ => LoadErrorKind::NoObjects,
         };
         return Err(LoadError::new(path, Location::File, kind));
@@ -133,6 +169,12 @@ fn build_scene(
     let origin = (world.min / ORIGIN_SNAP_M).floor() * ORIGIN_SNAP_M;
     raw.par_iter_mut()
         .for_each(|(_, o)| translate(&mut o.shape, -origin));
+    let o2 = DVec2::new(origin.x, origin.y);
+    for (_, s) in &mut report.skipped {
+        for p in s.outline.iter_mut().flatten() {
+            *p -= o2;
+        }
+    }
     report.timings.push(("localize", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
@@ -250,6 +292,7 @@ fn build_object(index: u32, file: u32, raw: RawObject) -> Built {
         object: Object {
             index,
             file,
+            feature: raw.feature,
             name: raw.name,
             location: raw.location,
             bbox: shape_bbox(&shape),

@@ -1,6 +1,6 @@
 //! Scenes: readers, the local frame and the 2.5D blocker model.
 //!
-//! Input: city model files (GeoJSON footprints, CityJSON 0.8/1.x/2.0, OBJ), in the order given.
+//! Input: city model files (GeoJSON footprints, CityJSON 0.3 to 2.0, OBJ), in the order given.
 //! Output: a [`Scene`] in a local frame: every object with its stable index, name, bounding box
 //! and cost, plus the convex 2.5D blockers proven solid, plus a report of what was skipped,
 //! repaired or gave no blocker, and why.
@@ -13,6 +13,7 @@
 //!   faces of a mesh, closed or not ([`walls`]);
 //! - nothing here panics on bad input: readers return [`LoadError`].
 
+pub mod attr;
 pub mod cityjson;
 pub mod decompose;
 pub mod error;
@@ -50,6 +51,27 @@ pub struct ReadOptions {
     /// CityJSON: the level of detail to read (as written in the file, e.g. "2" or "2.2").
     /// `None` takes the highest one each object has.
     pub lod: Option<String>,
+    /// GeoJSON: what a height, storey or base value that is not a number does
+    /// ([`attr`] says which strings are numbers): skip (fall back, then skip the feature with
+    /// its reason, counted in the report) or fail the load.
+    pub on_bad_height: OnBadHeight,
+    /// GeoJSON: the height of a feature with no usable height or storey count, metres (the last
+    /// fallback). `None`: such features are skipped.
+    pub default_height: Option<f64>,
+    /// CityJSON: city object types read besides `Building` and `BuildingPart` (as written in the
+    /// file, extension types with their `+`: `Bridge`, `+GenericCityObject`, ...).
+    pub types: Vec<String>,
+}
+
+/// What a GeoJSON height value that is not a number does.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OnBadHeight {
+    /// Try the next source (storeys, then the default height); with none, skip the feature and
+    /// report why.
+    #[default]
+    Skip,
+    /// Fail the load, naming the feature and the value.
+    Error,
 }
 
 impl Default for ReadOptions {
@@ -60,6 +82,9 @@ impl Default for ReadOptions {
             levels_attr: None,
             storey_height: 3.0,
             lod: None,
+            on_bad_height: OnBadHeight::Skip,
+            default_height: None,
+            types: Vec::new(),
         }
     }
 }
@@ -103,6 +128,9 @@ pub struct RawObject {
     pub name: String,
     /// Where it sits in its file, for reports.
     pub location: Location,
+    /// Its position among its file's items, from 0: the GeoJSON feature, the CityJSON city
+    /// object (all types, in file order), the OBJ group; skipped items count too.
+    pub feature: u32,
     pub shape: Shape,
 }
 
@@ -111,8 +139,13 @@ pub struct RawObject {
 pub enum SkipReason {
     /// No height attribute and no storey count to fall back on.
     NoHeight,
+    /// A height (or storey) value that is not a number, and no fallback: the attribute and the
+    /// value as written.
+    BadHeight { attr: String, value: String },
     /// A base attribute was asked for and this object has no value for it.
     NoBase,
+    /// The base value is not a number: the attribute and the value as written.
+    BadBase { attr: String, value: String },
     /// The geometry is `null` or empty.
     EmptyGeometry,
     /// A geometry type that has no area (Point, LineString, ...).
@@ -123,11 +156,30 @@ pub enum SkipReason {
     UnsupportedGeometry(String),
 }
 
+impl SkipReason {
+    /// A short, stable label for grouping in reports (no values).
+    pub fn label(&self) -> String {
+        match self {
+            SkipReason::BadHeight { attr, .. } => {
+                format!("height attribute {attr:?} not a number")
+            }
+            SkipReason::BadBase { attr, .. } => format!("base attribute {attr:?} not a number"),
+            other => other.to_string(),
+        }
+    }
+}
+
 impl fmt::Display for SkipReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SkipReason::NoHeight => write!(f, "no height attribute and no storey count"),
+            SkipReason::BadHeight { attr, value } => {
+                write!(f, "height attribute {attr:?} is {value}, not a number")
+            }
             SkipReason::NoBase => write!(f, "no value for the base attribute"),
+            SkipReason::BadBase { attr, value } => {
+                write!(f, "base attribute {attr:?} is {value}, not a number")
+            }
             SkipReason::EmptyGeometry => write!(f, "empty or null geometry"),
             SkipReason::NotAreal(t) => write!(f, "geometry type {t} has no area"),
             SkipReason::NoGeometryAtLod(l) => write!(f, "no geometry at LoD {l}"),
@@ -142,6 +194,49 @@ pub struct Skipped {
     pub location: Location,
     pub name: String,
     pub reason: SkipReason,
+    /// As [`RawObject::feature`] in a reader's output; in a [`SceneReport`], the input feature
+    /// number across all files ([`Object::feature`]).
+    pub feature: u32,
+    /// Its footprint rings when the reader had them (a GeoJSON feature skipped for its
+    /// height), for pictures; world coordinates from a reader, local in a [`SceneReport`].
+    pub outline: Vec<Ring>,
+}
+
+/// Where a footprint's height came from when its height attribute gave none.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum HeightSource {
+    /// The storey count times the storey height.
+    Storeys,
+    /// The default height the user gave.
+    Default,
+}
+
+/// A height taken from a fallback, and the values that were not numbers on the way (attribute,
+/// value as written).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeightFallback {
+    pub source: HeightSource,
+    pub passed: Vec<(String, String)>,
+}
+
+impl HeightFallback {
+    /// A short, stable label for grouping in reports.
+    pub fn label(&self) -> &'static str {
+        match self.source {
+            HeightSource::Storeys => "height from the storey count",
+            HeightSource::Default => "height from --default-height",
+        }
+    }
+}
+
+impl fmt::Display for HeightFallback {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.label())?;
+        for (a, v) in &self.passed {
+            write!(f, "; {a:?} is {v}, not a number")?;
+        }
+        Ok(())
+    }
 }
 
 /// What one reader returns for one file.
@@ -149,8 +244,13 @@ pub struct Skipped {
 pub struct FileRead {
     pub objects: Vec<RawObject>,
     pub skipped: Vec<Skipped>,
+    /// GeoJSON: objects (index into `objects`) whose height came from a fallback.
+    pub fallbacks: Vec<(usize, HeightFallback)>,
     /// CityJSON: city objects of other types, skipped and counted by type.
     pub other_types: BTreeMap<String, usize>,
+    /// How many items the file holds (GeoJSON features, CityJSON city objects, OBJ groups):
+    /// the span of input feature numbers it takes.
+    pub items: usize,
     /// CityJSON: the levels of detail of the geometries of the objects read, as written.
     pub lods: std::collections::BTreeSet<String>,
 }
@@ -193,6 +293,11 @@ pub struct Object {
     pub index: u32,
     /// Index into [`Scene::files`].
     pub file: u32,
+    /// Input feature number: its position among the items of all files, in input order, with
+    /// skipped items counted (the GeoJSON feature index for one GeoJSON file; CityJSON city
+    /// objects of every type and OBJ groups in file order). `pvs` and `info` name objects by
+    /// it, so a number means the same feature whatever was skipped.
+    pub feature: u32,
     pub name: String,
     pub location: Location,
     /// Local bounding box.
@@ -343,6 +448,9 @@ pub struct SceneReport {
     pub repairs: Vec<(u32, usize, usize, RingRepair)>,
     /// (object index, reason)
     pub no_blocker: Vec<(u32, NoBlocker)>,
+    /// (object index, where its height came from) for footprints whose height attribute gave
+    /// none.
+    pub height_fallbacks: Vec<(u32, HeightFallback)>,
     /// Wall-clock seconds per stage, in pipeline order.
     pub timings: Vec<(&'static str, f64)>,
 }

@@ -227,8 +227,15 @@ pub fn read_obj(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<FileRe
     // and the file as location rather than mislabel objects.
     let aligned = sc.models.len() == models.len();
     let mut out = FileRead::default();
+    // Input feature numbers: the emitted groups (objects and skips) in line order, faces before
+    // any group statement first; assigned once all are known (see the end).
+    let mut obj_lines: Vec<usize> = Vec::new();
+    let mut skip_lines: Vec<usize> = Vec::new();
     for g in &sc.empty {
+        skip_lines.push(g.line.unwrap_or(0));
         out.skipped.push(Skipped {
+            feature: 0,
+            outline: Vec::new(),
             location: g
                 .line
                 .map_or(Location::File, |line| Location::Line { line, column: None }),
@@ -242,6 +249,7 @@ pub fn read_obj(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<FileRe
     }
     let mut any_faces = false;
     for (k, model) in models.into_iter().enumerate() {
+        let group_line = if aligned { sc.models[k].line } else { None };
         let (location, mut name) = if aligned {
             let g = &sc.models[k];
             (
@@ -266,17 +274,22 @@ pub fn read_obj(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<FileRe
             if aligned && sc.models[k].line.is_none() {
                 continue;
             }
+            skip_lines.push(group_line.unwrap_or(0));
             out.skipped.push(Skipped {
                 location,
                 name,
                 reason: SkipReason::EmptyGeometry,
+                feature: 0,
+                outline: Vec::new(),
             });
             continue;
         }
         any_faces = true;
+        obj_lines.push(if aligned { group_line.unwrap_or(0) } else { k });
         out.objects.push(RawObject {
             name,
             location,
+            feature: 0,
             shape: Shape::Mesh(mesh),
         });
     }
@@ -286,6 +299,30 @@ pub fn read_obj(path: &Path, bytes: &[u8], _opts: &ReadOptions) -> Result<FileRe
             LoadErrorKind::MalformedObj("no faces".into()),
         ));
     }
+    // Number the groups by line (when the scan and tobj disagree, objects by tobj's order and
+    // skips after them).
+    if !aligned {
+        skip_lines = vec![usize::MAX; skip_lines.len()];
+    }
+    let mut all: Vec<usize> = obj_lines.iter().chain(&skip_lines).copied().collect();
+    all.sort_unstable();
+    let rank = |l: &usize, taken: &mut Vec<bool>| -> u32 {
+        // The first untaken position of this line (lines are distinct unless not aligned).
+        let start = all.partition_point(|x| x < l);
+        let p = (start..all.len()).find(|&p| !taken[p]).unwrap_or(start);
+        if let Some(t) = taken.get_mut(p) {
+            *t = true;
+        }
+        p as u32
+    };
+    let mut taken = vec![false; all.len()];
+    for (o, l) in out.objects.iter_mut().zip(&obj_lines) {
+        o.feature = rank(l, &mut taken);
+    }
+    for (s, l) in out.skipped.iter_mut().zip(&skip_lines) {
+        s.feature = rank(l, &mut taken);
+    }
+    out.items = all.len();
     // Objects and skips are each in file order; keep skips sorted by line for reports.
     out.skipped.sort_by_key(|s| match s.location {
         Location::Line { line, .. } => line,

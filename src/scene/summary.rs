@@ -45,6 +45,9 @@ pub struct Summary {
     pub repaired_rings_by_kind: BTreeMap<String, usize>,
     pub repaired_objects: usize,
     pub no_blocker_by_reason: BTreeMap<String, usize>,
+    /// Footprints whose height came from a fallback (storeys, `--default-height`), by source.
+    pub height_fallbacks_by_source: BTreeMap<String, usize>,
+    pub height_fallbacks: Vec<Entry>,
     pub skipped: Vec<Entry>,
     pub repaired: Vec<Entry>,
     pub no_blocker: Vec<Entry>,
@@ -68,6 +71,8 @@ pub struct Entry {
     pub file: String,
     /// Object index, when the object made it into the scene.
     pub object: Option<u32>,
+    /// Input feature number ([`super::Object::feature`]), skipped objects included.
+    pub feature: u32,
     pub name: String,
     pub location: String,
     pub reason: String,
@@ -113,6 +118,7 @@ pub fn summarize(scene: &Scene) -> Summary {
         Entry {
             file: file_name(o.file),
             object: Some(idx),
+            feature: o.feature,
             name: o.name.clone(),
             location: loc_str(&o.location),
             reason,
@@ -138,10 +144,11 @@ pub fn summarize(scene: &Scene) -> Summary {
         .skipped
         .iter()
         .map(|(fi, s)| {
-            *skipped_by_reason.entry(s.reason.to_string()).or_insert(0) += 1;
+            *skipped_by_reason.entry(s.reason.label()).or_insert(0) += 1;
             Entry {
                 file: file_name(*fi),
                 object: None,
+                feature: s.feature,
                 name: s.name.clone(),
                 location: loc_str(&s.location),
                 reason: s.reason.to_string(),
@@ -167,6 +174,19 @@ pub fn summarize(scene: &Scene) -> Summary {
         .map(|(idx, why)| {
             *no_blocker_by_reason.entry(why.label()).or_insert(0) += 1;
             obj_entry(*idx, why.to_string())
+        })
+        .collect();
+
+    let mut height_fallbacks_by_source = BTreeMap::new();
+    let height_fallbacks: Vec<Entry> = scene
+        .report
+        .height_fallbacks
+        .iter()
+        .map(|(idx, f)| {
+            *height_fallbacks_by_source
+                .entry(f.label().to_string())
+                .or_insert(0) += 1;
+            obj_entry(*idx, f.to_string())
         })
         .collect();
 
@@ -221,6 +241,8 @@ pub fn summarize(scene: &Scene) -> Summary {
         repaired_rings_by_kind,
         repaired_objects: repaired_ids.len(),
         no_blocker_by_reason,
+        height_fallbacks_by_source,
+        height_fallbacks,
         skipped,
         repaired,
         no_blocker,
