@@ -1300,3 +1300,162 @@ fn lod_9_lists_the_lods_that_exist_not_the_scene_has_no_objects() {
         "{err}"
     );
 }
+
+/// Issue 12: objects skipped for their height vanished without a word in `bake`, and `pvs`
+/// numbered the loaded objects, not the input features.
+#[test]
+fn bake_counts_skipped_features_and_pvs_keeps_input_feature_numbers() {
+    let dir = common::temp_dir("cli-feature-numbers");
+    let scene = dir.join("row.geojson");
+    let f = |i: usize, h: &str| {
+        let x = 20 * i;
+        format!(
+            r#"{{"type":"Feature","properties":{{"h":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},0],[{},0],[{},10],[{x},10],[{x},0]]]}}}}"#,
+            x + 10,
+            x + 10
+        )
+    };
+    let text = format!(
+        r#"{{"type":"FeatureCollection","features":[{},{},{},{}]}}"#,
+        f(0, "null"),
+        f(1, "\"12.13 m\""),
+        f(2, "\"tall\""),
+        f(3, "9")
+    );
+    std::fs::write(&scene, text).unwrap();
+    let store = dir.join("row.vocc");
+    let s = scene.to_str().unwrap();
+    let out = vocc(&[
+        "bake",
+        s,
+        "--height-attr",
+        "h",
+        "-o",
+        store.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("scene: 2 objects; 2 skipped (1 height attribute \"h\" not a number, 1 no height attribute and no storey count; vocc info lists each)"),
+        "{err}"
+    );
+    let out = vocc(&[
+        "pvs",
+        store.to_str().unwrap(),
+        s,
+        "--height-attr",
+        "h",
+        "--cell",
+        "0",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["pvs"], serde_json::json!([1, 3]), "{v}");
+    // info names them by the same numbers.
+    let out = vocc(&["info", s, "--height-attr", "h"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(r##"#2 "feature 2""##), "{text}");
+    assert!(
+        text.contains(r#"height attribute "h" is "tall", not a number"#),
+        "{text}"
+    );
+    // Under --on-bad-height error the load stops at feature 2.
+    let out = vocc(&["info", s, "--height-attr", "h", "--on-bad-height", "error"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(r#"feature 2: attribute "h" has value "tall", which is not a number"#),
+        "{err}"
+    );
+}
+
+/// Issue 12, pictures: `render` drew mesh objects as their bounding boxes and left skipped
+/// objects out. A mesh of walls alone (an open L, no roof) is drawn by its walls' lines, and the
+/// GeoJSON features skipped for their height are drawn dashed.
+#[test]
+fn render_draws_mesh_walls_and_skipped_objects() {
+    let dir = common::temp_dir("cli-render-walls");
+    let geo = dir.join("row.geojson");
+    let f = |i: usize, h: &str| {
+        let x = 20 * i;
+        format!(
+            r#"{{"type":"Feature","properties":{{"h":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},0],[{},0],[{},10],[{x},10],[{x},0]]]}}}}"#,
+            x + 10,
+            x + 10
+        )
+    };
+    std::fs::write(
+        &geo,
+        format!(
+            r#"{{"type":"FeatureCollection","features":[{},{},{}]}}"#,
+            f(0, "null"),
+            f(1, "8"),
+            f(2, "\"tall\"")
+        ),
+    )
+    .unwrap();
+    // Two walls of an L from (0,30) to (30,30) to (30,60), 6 m high.
+    let obj = dir.join("l.obj");
+    std::fs::write(
+        &obj,
+        "o l\nv 0 30 0\nv 30 30 0\nv 30 30 6\nv 0 30 6\nv 30 60 0\nv 30 60 6\nf 1 2 3 4\nf 2 5 6 3\n",
+    )
+    .unwrap();
+    let store = dir.join("s.vocc");
+    let (g, o, st) = (
+        geo.to_str().unwrap(),
+        obj.to_str().unwrap(),
+        store.to_str().unwrap(),
+    );
+    let out = vocc(&["bake", g, o, "--height-attr", "h", "-o", st]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = dir.join("c.svg");
+    let out = vocc(&[
+        "render",
+        st,
+        g,
+        o,
+        "--height-attr",
+        "h",
+        "--cell",
+        "0",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(
+        text.matches("stroke-dasharray").count(),
+        2,
+        "two skipped features"
+    );
+    assert!(text.contains("2 skipped objects (dashed)"), "{text}");
+    // The L's walls: one open polyline per wall face (no closing Z), drawn as strokes; and no
+    // filled box for it.
+    let walls: Vec<&str> = text
+        .split("<path d=\"")
+        .skip(1)
+        .map(|p| p.split("/>").next().unwrap())
+        .filter(|p| p.contains("stroke-width=\"2\""))
+        .collect();
+    assert_eq!(walls.len(), 1, "{text}");
+    assert_eq!(walls[0].split('"').next().unwrap().matches('M').count(), 2);
+    assert!(!walls[0].split('"').next().unwrap().contains('Z'));
+}

@@ -61,31 +61,77 @@ pub fn cell_picture(
             n_fused += 1;
             "#d62728"
         };
-        let rings: Vec<Vec<(f64, f64)>> = match &o.shape {
-            Shape::Footprint(fp) => fp
-                .polygons
+        let path = |rings: &[Vec<(f64, f64)>], close: bool| -> String {
+            rings
                 .iter()
-                .flat_map(|poly| poly.iter())
-                .map(|ring| ring.iter().map(|v| (v.x, v.y)).collect())
-                .collect(),
-            Shape::Mesh(_) => vec![vec![
-                (b.min.x, b.min.y),
-                (b.max.x, b.min.y),
-                (b.max.x, b.max.y),
-                (b.min.x, b.max.y),
-            ]],
+                .filter(|ring| ring.len() >= 2)
+                .map(|ring| {
+                    let pts: Vec<String> = ring.iter().map(|&(x, y)| p(x, y)).collect();
+                    format!("M{}{}", pts.join("L"), if close { "Z" } else { "" })
+                })
+                .collect()
         };
-        let d: String = rings
+        match &o.shape {
+            Shape::Footprint(fp) => {
+                let rings: Vec<Vec<(f64, f64)>> = fp
+                    .polygons
+                    .iter()
+                    .flat_map(|poly| poly.iter())
+                    .map(|ring| ring.iter().map(|v| (v.x, v.y)).collect())
+                    .collect();
+                let d = path(&rings, true);
+                let _ = write!(
+                    s,
+                    r##"<path d="{d}" fill="{fill}" fill-rule="evenodd" stroke="#555" stroke-width="0.4"/>"##
+                );
+            }
+            Shape::Mesh(m) => {
+                // The real footprint: faces seen from above (roofs, floors, sloped walls) filled,
+                // vertical faces (walls) drawn as their lines, so an open mesh of walls alone
+                // still shows its outline.
+                let (covers, walls) = mesh_top_view(m);
+                let d = path(&covers, true);
+                if !d.is_empty() {
+                    let _ = write!(
+                        s,
+                        r##"<path d="{d}" fill="{fill}" fill-rule="nonzero" stroke="none"/>"##
+                    );
+                }
+                let w = path(&walls, false);
+                if !w.is_empty() {
+                    let _ = write!(
+                        s,
+                        r##"<path d="{w}" fill="none" stroke="{fill}" stroke-width="2"/><path d="{w}" fill="none" stroke="#555" stroke-width="0.4"/>"##
+                    );
+                }
+            }
+        }
+    }
+    // Objects the readers skipped (no height, ...), where their outline is known: light grey,
+    // dashed.
+    let mut n_skipped = 0;
+    for (_, k) in &scene.report.skipped {
+        let near = k
+            .outline
             .iter()
-            .filter(|ring| !ring.is_empty())
+            .flatten()
+            .any(|v| (v.x - cx).abs() <= radius && (v.y - cy).abs() <= radius);
+        if !near {
+            continue;
+        }
+        n_skipped += 1;
+        let d: String = k
+            .outline
+            .iter()
+            .filter(|ring| ring.len() >= 2)
             .map(|ring| {
-                let pts: Vec<String> = ring.iter().map(|&(x, y)| p(x, y)).collect();
+                let pts: Vec<String> = ring.iter().map(|v| p(v.x, v.y)).collect();
                 format!("M{}Z", pts.join("L"))
             })
             .collect();
         let _ = write!(
             s,
-            r##"<path d="{d}" fill="{fill}" fill-rule="evenodd" stroke="#555" stroke-width="0.4"/>"##
+            r##"<path d="{d}" fill="#eeeeee" fill-rule="evenodd" stroke="#999" stroke-width="0.6" stroke-dasharray="3 2"/>"##
         );
     }
     let _ = write!(
@@ -120,9 +166,14 @@ pub fn cell_picture(
     // characters of 13 px sans-serif).
     let _ = write!(
         s,
-        r##"<text x="10" y="{}">cell {id}: {} VOs (blue, numbered in stored order)</text><text x="10" y="{}">buildings: visible {n_vis} (grey), culled thanks to fusion {n_fused} (red){}</text></svg>"##,
+        r##"<text x="10" y="{}">cell {id}: {} VOs (blue, numbered in stored order){}</text><text x="10" y="{}">buildings: visible {n_vis} (grey), culled thanks to fusion {n_fused} (red){}</text></svg>"##,
         size + 24.0,
         rec.vos().len(),
+        if n_skipped > 0 {
+            format!("; {n_skipped} skipped objects (dashed)")
+        } else {
+            String::new()
+        },
         size + 46.0,
         if baseline.is_some() {
             format!(", culled by single buildings alone {n_single} (orange)")
@@ -132,4 +183,57 @@ pub fn cell_picture(
     );
     s.push('\n');
     s
+}
+
+/// Points in the plane, in order.
+type Polyline = Vec<(f64, f64)>;
+
+/// A mesh seen from above: the outer rings of the faces that cover area, counter-clockwise, with
+/// their holes clockwise (so a nonzero fill unites them), and the lines of the vertical faces.
+fn mesh_top_view(m: &crate::scene::Mesh) -> (Vec<Polyline>, Vec<Polyline>) {
+    let mut covers = Vec::new();
+    let mut walls = Vec::new();
+    for f in &m.faces {
+        let rings: Vec<Vec<(f64, f64)>> = f
+            .rings
+            .iter()
+            .map(|r| {
+                r.iter()
+                    .filter_map(|&i| m.vertices.get(i as usize))
+                    .map(|v| (v.x, v.y))
+                    .collect()
+            })
+            .collect();
+        let Some(outer) = rings.first() else { continue };
+        let area2 = |r: &[(f64, f64)]| -> f64 {
+            (0..r.len())
+                .map(|k| {
+                    let (a, b) = (r[k], r[(k + 1) % r.len()]);
+                    a.0 * b.1 - b.0 * a.1
+                })
+                .sum()
+        };
+        let perimeter: f64 = (0..outer.len())
+            .map(|k| {
+                let (a, b) = (outer[k], outer[(k + 1) % outer.len()]);
+                (b.0 - a.0).hypot(b.1 - a.1)
+            })
+            .sum();
+        let a = area2(outer);
+        // Drawing only: a face whose outline encloses (almost) no area is a wall.
+        if a.abs() <= 1e-9 * perimeter * perimeter {
+            walls.push(outer.clone());
+            continue;
+        }
+        for (k, r) in rings.iter().enumerate() {
+            let ccw = area2(r) > 0.0;
+            let want_ccw = k == 0;
+            let mut r = r.clone();
+            if ccw != want_ccw {
+                r.reverse();
+            }
+            covers.push(r);
+        }
+    }
+    (covers, walls)
 }

@@ -107,6 +107,50 @@ pub struct Dataset {
     pub flags: String,
 }
 
+/// Objects that give blockers, per bundled mesh dataset: (objects, with solid prisms, with any
+/// blocker, walls). Solid prisms are what closed-mesh extraction proves (`scene/solid.rs`), the
+/// only mesh blockers before walls; walls come from vertical faces (`scene/walls.rs`).
+pub fn blocker_shares(scene: &Scene) -> (usize, usize, usize, usize) {
+    let n = scene.objects.len();
+    let (mut prism, mut any) = (vec![false; n], vec![false; n]);
+    let mut walls = 0;
+    for b in &scene.blockers {
+        let o = b.object as usize;
+        any[o] = true;
+        if b.polygon.len() > 2 {
+            prism[o] = true;
+        } else {
+            walls += 1;
+        }
+    }
+    let count = |v: &[bool]| v.iter().filter(|&&x| x).count();
+    (n, count(&prism), count(&any), walls)
+}
+
+/// The Markdown table of [`blocker_shares`] for the given mesh datasets (name, files): loads
+/// each, so its figures are this run's.
+pub fn blocker_share_section(datasets: &[(&str, PathBuf)]) -> Result<String, scene::LoadError> {
+    let mut md = String::from(
+        "## Mesh objects that give blockers
+
+         Per bundled mesh dataset, the share of objects that give blockers: before walls, only          the solid prisms proven inside closed meshes (`src/scene/solid.rs`); after, solid prisms          or walls from vertical faces (`src/scene/walls.rs`, ARCHITECTURE.md). Command: `vocc info FILE`.\n\n         | dataset | objects | with solid prisms (before) | with prisms or walls (after) | walls |\n         |---|---|---|---|---|\n",
+    );
+    for (name, file) in datasets {
+        let s = scene::load(std::slice::from_ref(file), &ReadOptions::default())?;
+        let (n, prism, any, walls) = blocker_shares(&s);
+        let pct = |k: usize| 100.0 * k as f64 / n.max(1) as f64;
+        let _ = writeln!(
+            md,
+            "| {name} (`{}`) | {n} | {prism} ({:.1}%) | {any} ({:.1}%) | {walls} |",
+            file.display(),
+            pct(prism),
+            pct(any)
+        );
+    }
+    md.push('\n');
+    Ok(md)
+}
+
 /// Sampling of the suite.
 pub struct SuiteParams {
     pub truth: TruthParams,
