@@ -259,15 +259,31 @@ fn geojson_nan_infinite_and_huge_values_are_located_errors() {
         );
         assert!(matches!(e.location, Location::Line { line: 1, .. }), "{e}");
     }
-    // As attribute strings they parse as numbers, and the range check refuses them.
+    // As attribute strings they are not numbers (scene::attr): the feature is skipped with its
+    // reason, or, under --on-bad-height error, the load fails there.
     for (props, what) in [
         (r#"{"height":"NaN"}"#, "height"),
         (r#"{"height":"inf"}"#, "height"),
         (r#"{"height":"-1e999"}"#, "height"),
         (r#"{"height":null,"levels":"NaN"}"#, "levels"),
     ] {
-        let e = fails("a.geojson", &with(props, SQUARE));
-        assert!(matches!(e.kind, LoadErrorKind::NonFinite(_)), "{what}: {e}");
+        let text = with(props, SQUARE);
+        let s = load_one("a.geojson", &text).unwrap();
+        assert_eq!(s.objects.len(), 1, "{what}");
+        assert!(
+            matches!(&s.report.skipped[0].1.reason, vocc::scene::SkipReason::BadHeight { attr, .. } if attr == what),
+            "{what}: {:?}",
+            s.report.skipped
+        );
+        let strict = ReadOptions {
+            on_bad_height: vocc::scene::OnBadHeight::Error,
+            ..opts()
+        };
+        let e = load_bytes(&[(PathBuf::from("a.geojson"), text.as_bytes())], &strict).unwrap_err();
+        assert!(
+            matches!(&e.kind, LoadErrorKind::BadAttribute { attr, .. } if attr == what),
+            "{what}: {e}"
+        );
         assert_eq!(e.location, Location::Feature(1), "{e}");
     }
     // 1e300 as a height, as storeys (times 3 m), and a coordinate of 1e300 written with a huge

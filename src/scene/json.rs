@@ -261,7 +261,17 @@ mod tests {
             {{"type":"Feature","properties":{{"h":"x"}},"geometry":{SQUARE}}},
             {{"type":"Feature","properties":{{"h":3}},"geometry":{SQUARE}}}]}}"#
         );
-        let e = read(&text).unwrap_err();
+        // A height that is not a number is an error under `--on-bad-height error`.
+        let opts = ReadOptions {
+            height_attr: Some("h".into()),
+            on_bad_height: crate::scene::OnBadHeight::Error,
+            ..ReadOptions::default()
+        };
+        let e = read_json(Path::new("t.geojson"), text.as_bytes(), &opts).unwrap_err();
         assert_eq!(e.location, Location::Feature(1));
+        // By default it skips that feature and reads on.
+        let (r, _) = read(&text).unwrap();
+        assert_eq!(r.objects.len(), 2);
+        assert_eq!(r.skipped[0].feature, 1);
     }
 }

@@ -139,18 +139,20 @@ fn build_scene(
             .iter()
             .all(|(_, s)| matches!(s.reason, super::SkipReason::NoGeometryAtLod(_)));
         // CityJSON city objects there are, but none of a type read: say which types there are.
+        // (Only types a reader could read: "Building (no geometry)" is a note, not a type.)
         let mut held: std::collections::BTreeMap<String, usize> = Default::default();
         for f in &report.files {
             for (t, n) in &f.other_types {
                 *held.entry(t.clone()).or_default() += n;
             }
         }
+        let readable = held.keys().any(|t| !t.contains(' '));
         let kind = match wanted {
             Some(lod) if all_lod && !lods.is_empty() => LoadErrorKind::NoObjectsAtLod {
                 lod,
                 available: lods.into_iter().collect(),
             },
-            _ if report.skipped.is_empty() && !held.is_empty() => {
+            _ if report.skipped.is_empty() && readable => {
                 let mut read = vec!["Building".to_string(), "BuildingPart".to_string()];
                 read.extend(types.iter().cloned());
                 LoadErrorKind::NoObjectsOfTypes {
