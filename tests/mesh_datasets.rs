@@ -293,6 +293,13 @@ fn the_results_table_of_blocker_shares_is_measured() {
     ])
     .unwrap();
     eprintln!("{md}");
+    // Regression: the text and the table head were indented by 9 spaces (a string literal
+    // without line continuations), which Markdown shows as a code block, not a table.
+    assert!(
+        md.lines().all(|l| !l.starts_with(' ')),
+        "an indented line turns into a code block: {md}"
+    );
+    assert!(md.contains("\n\n| dataset | objects |"), "{md}");
     assert!(
         md.contains("| 105 | 77 (73.3%) | 81 (77.1%) | 2631 |"),
         "{md}"

@@ -131,9 +131,13 @@ pub fn blocker_shares(scene: &Scene) -> (usize, usize, usize, usize) {
 /// each, so its figures are this run's.
 pub fn blocker_share_section(datasets: &[(&str, PathBuf)]) -> Result<String, scene::LoadError> {
     let mut md = String::from(
-        "## Mesh objects that give blockers
-
-         Per bundled mesh dataset, the share of objects that give blockers: before walls, only          the solid prisms proven inside closed meshes (`src/scene/solid.rs`); after, solid prisms          or walls from vertical faces (`src/scene/walls.rs`, ARCHITECTURE.md). Command: `vocc info FILE`.\n\n         | dataset | objects | with solid prisms (before) | with prisms or walls (after) | walls |\n         |---|---|---|---|---|\n",
+        "## Mesh objects that give blockers\n\n\
+         Per bundled mesh dataset, the share of objects that give blockers: before walls, only \
+         the solid prisms proven inside closed meshes (`src/scene/solid.rs`); after, solid prisms \
+         or walls from vertical faces (`src/scene/walls.rs`, ARCHITECTURE.md). Command: \
+         `vocc info FILE`.\n\n\
+         | dataset | objects | with solid prisms (before) | with prisms or walls (after) | walls |\n\
+         |---|---|---|---|---|\n",
     );
     for (name, file) in datasets {
         let s = scene::load(std::slice::from_ref(file), &ReadOptions::default())?;
