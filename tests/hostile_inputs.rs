@@ -672,6 +672,19 @@ fn temp_of(out: &Path) -> PathBuf {
     out.with_file_name(format!(".{name}.tmp"))
 }
 
+/// Whether this process ignores SIGINT (inherited by the processes it starts): bit 1 of the
+/// `SigIgn` mask in /proc/self/status. False where there is no /proc.
+#[cfg(unix)]
+fn sigint_ignored() -> bool {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            let mask = s.lines().find_map(|l| l.strip_prefix("SigIgn:"))?;
+            u64::from_str_radix(mask.trim(), 16).ok()
+        })
+        .is_some_and(|m| m & (1 << (2 - 1)) != 0)
+}
+
 #[cfg(unix)]
 #[test]
 fn a_killed_bake_leaves_no_store_and_keeps_the_old_one() {
@@ -703,7 +716,18 @@ fn a_killed_bake_leaves_no_store_and_keeps_the_old_one() {
             if previous {
                 std::fs::write(&out, &old_bytes).unwrap();
             }
-            let mut child = Command::new(env!("CARGO_BIN_EXE_vocc"))
+            // A shell without job control starts background jobs with SIGINT ignored, and the
+            // child inherits that (as under `make fresh-clone &`): the bake then ran to its end
+            // and exited 0. Give it the default action back, as a terminal's Ctrl-C would meet.
+            let mut cmd = if signal == 2 && sigint_ignored() {
+                let mut e = Command::new("env");
+                e.arg("--default-signal=INT")
+                    .arg(env!("CARGO_BIN_EXE_vocc"));
+                e
+            } else {
+                Command::new(env!("CARGO_BIN_EXE_vocc"))
+            };
+            let mut child = cmd
                 .args(bake_args(c, out.to_str().unwrap()))
                 .stdout(std::process::Stdio::null())
                 .stderr(std::process::Stdio::null())
