@@ -11,10 +11,13 @@
 //! dequantized form; a VO that fails is shrunk or dropped and counted.
 
 pub mod budget;
+pub mod certify;
 pub mod decimate;
+pub mod hidden;
 pub mod incremental;
 pub mod job;
 pub mod pipeline;
+pub mod propose;
 pub mod quantize;
 pub mod scan;
 pub mod seed;

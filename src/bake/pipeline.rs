@@ -77,6 +77,20 @@ pub struct BakeParams {
     pub spines: usize,
     /// Propose the hidden runs of scan lines around the cell ([`super::scan`]).
     pub scan: bool,
+    /// Which generator proposes the VOs.
+    pub generator: Generator,
+    /// The long generator's sampled visibility and line scan.
+    pub map: super::hidden::MapParams,
+    pub propose: super::propose::ProposeParams,
+}
+
+/// Which generator proposes a cell's VOs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Generator {
+    /// Aggregate umbrae grown from seeds (paper 002, section 3).
+    Growth,
+    /// Long hidden runs of lines from sampled from-region visibility ([`super::propose`]).
+    Long,
 }
 
 impl Default for BakeParams {
@@ -94,6 +108,9 @@ impl Default for BakeParams {
             },
             spines: 0,
             scan: false,
+            generator: Generator::Long,
+            map: super::hidden::MapParams::default(),
+            propose: super::propose::ProposeParams::default(),
         }
     }
 }
@@ -139,6 +156,13 @@ pub struct CellStats {
     pub unquantized: Vec<crate::runtime::frame::VoGeom>,
     /// Occludee cost hidden by the stored VOs (rule 3, within the weighting radius).
     pub hidden_cost: u64,
+    /// Length of the proposals sent to the exact verifier, and of the certified pieces kept
+    /// from them, metres (the verifier's completeness).
+    pub proposed_m: f64,
+    pub certified_m: f64,
+    /// Time per stage of the long generator, ms: hidden maps, proposals, rule-3 weights,
+    /// selection with certification.
+    pub stage_ms: [f64; 4],
     pub ms: f64,
 }
 
@@ -376,6 +400,9 @@ impl<'s> Plan<'s> {
             Slices::Fixed(n) => n as usize,
         };
         stats.levels = choose_levels(&levels, &adjusted, n);
+        if self.params.generator == Generator::Long {
+            return self.long_vos(id, ground, &cell, &near, &support, &levels, stats);
+        }
 
         // The dense set, per slice.
         let radius = self.reach();
@@ -534,6 +561,107 @@ impl<'s> Plan<'s> {
         all.dedup();
         stats.hidden_cost = self.occludees.cost_of(&all);
         // A cell without VOs stores no ground byte: its ground is 0 in the record.
+        let ground = if vos.is_empty() { 0 } else { ground };
+        CellRecord::new(ground, &vos).expect("greedy stops at max_vos, checked <= 10 in Plan::new")
+    }
+
+    /// The long generator: per slice, the sampled hidden map, its long runs, exact rule-3
+    /// weights; greedy picks, each certified exactly when picked.
+    #[allow(clippy::too_many_arguments)]
+    fn long_vos(
+        &self,
+        id: CellId,
+        ground: u8,
+        cell: &[DVec2; 4],
+        near: &[u32],
+        support: &[Support],
+        levels: &[f64],
+        stats: &mut CellStats,
+    ) -> CellRecord {
+        let f = &self.frame;
+        let Some(view) = f.cell_view(id, ground) else {
+            return CellRecord::EMPTY;
+        };
+        let (g, e0, e1) = (f.ground_z(ground), view.e0, view.e1);
+        let radius = self.reach();
+        let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
+        let mut hidden: Vec<Vec<u32>> = Vec::new();
+        let clock = |t: &mut Instant| {
+            let e = t.elapsed().as_secs_f64() * 1e3;
+            *t = Instant::now();
+            e
+        };
+        let mut t = Instant::now();
+        for &k in &stats.levels {
+            let h = levels[k as usize];
+            let polys = near
+                .iter()
+                .zip(support)
+                .filter(|(_, s)| s.top >= h)
+                .map(|(&i, _)| self.set.polys[i as usize].as_slice());
+            let edges = super::hidden::boundary_edges(polys);
+            let map = super::hidden::HiddenMap::build(cell, &edges, &self.params.map);
+            stats.stage_ms[0] += clock(&mut t);
+            let props = super::propose::runs(cell, &map, &self.params.propose);
+            stats.stage_ms[1] += clock(&mut t);
+            for p in props {
+                let geom = crate::runtime::frame::VoGeom {
+                    a: p.a.to_array(),
+                    b: p.b.to_array(),
+                    g,
+                    h,
+                };
+                let hid = self.occludees.hidden(&view, &geom, radius);
+                if !hid.is_empty() {
+                    cands.push((k, p.a, p.b));
+                    hidden.push(hid);
+                }
+            }
+            stats.stage_ms[2] += clock(&mut t);
+        }
+        stats.dense = cands.len();
+        let certifier = super::certify::Certifier {
+            frame: f,
+            id,
+            ground,
+            cell: *cell,
+            heights: (e0, e1, g),
+            blockers: near
+                .iter()
+                .zip(support)
+                .map(|(&i, s)| (self.set.polys[i as usize].as_slice(), *s))
+                .collect(),
+        };
+        let mut cs = super::certify::CertifyStats::default();
+        let vos = greedy(&hidden, &self.occludees.cost, self.params.max_vos, |i| {
+            let (k, a, b) = cands[i];
+            let c = certifier.certify(k, a, b, &mut cs)?;
+            let before = crate::runtime::frame::VoGeom {
+                a: c.piece.0.to_array(),
+                b: c.piece.1.to_array(),
+                g,
+                h: f.vo_top(e1, k),
+            };
+            Some(((c.q, before), self.occludees.hidden(&view, &c.geom, radius)))
+        });
+        stats.stage_ms[3] += clock(&mut t);
+        stats.tried = cs.tried;
+        stats.shrunk = cs.shrunk;
+        stats.dropped = cs.tried - cs.stored;
+        stats.checks = cs.checks;
+        stats.proposed_m = cs.proposed_m;
+        stats.certified_m = cs.certified_m;
+        let (vos, before): (Vec<QVo>, Vec<crate::runtime::frame::VoGeom>) = vos.into_iter().unzip();
+        stats.unquantized = before;
+        let mut all: Vec<u32> = Vec::new();
+        for q in &vos {
+            if let Some(geom) = f.dequantize(id, ground, q) {
+                all.extend(self.occludees.hidden(&view, &geom, radius));
+            }
+        }
+        all.sort_unstable();
+        all.dedup();
+        stats.hidden_cost = self.occludees.cost_of(&all);
         let ground = if vos.is_empty() { 0 } else { ground };
         CellRecord::new(ground, &vos).expect("greedy stops at max_vos, checked <= 10 in Plan::new")
     }

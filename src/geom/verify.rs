@@ -50,30 +50,42 @@
 //! determinant is affine in `q`), so a certificate that holds at both ends of a segment holds at
 //! every point of it. ∎
 //!
-//! ## The search
-//! A piece whose two ends lie in one blocker lies in it (blockers are convex), and is hidden.
-//! Other pieces of `s` are bisected at their midpoints, but only where the midpoint is exactly
-//! representable (checked; it then lies exactly on `s`), down to [`MIN_PIECE_M`]. For a piece, a
-//! candidate certificate is read off at one exact point of it (the tangent vertices of each
-//! blocker in front, then the shortest chain of overlapping chords that covers the cell's angle,
-//! by breadth-first search, joining blockers that share a vertex through it), and checked exactly
-//! at both ends.
-//! Pieces that cannot be certified count as visible: the output can only be smaller than the true
-//! hidden set, never larger.
+//! ## The search: a sweep along the segment
+//! Parameters along `s` are dyadic, `t = j / 2^30`, and a point is used only when `a + t (b - a)`
+//! is exactly representable (checked), so it lies exactly on `s` and consecutive pieces tile `s`
+//! with no gap. From the current point `q` (first `a`) a certificate is read off at `q` and a
+//! probe point a little ahead (the tangent vertices of each blocker near them, then the shortest
+//! chain of overlapping chords that covers the cell's angle, by breadth-first search, joining
+//! blockers that share a vertex through it), checked exactly at both. Every condition is affine
+//! along `s`, so where the certificate stops holding is estimated in floating point from its
+//! values at `q` and `b`; the estimate is rounded down to a dyadic point and the certificate is
+//! checked exactly there (binary search back towards the probe when rounding made it fail). By
+//! Lemma 2 the piece between is hidden; the sweep goes on from its end. A piece whose two ends lie
+//! in one blocker lies in it (blockers are convex), and is hidden. Where no certificate is found,
+//! the sweep steps on, doubling its step from [`MIN_PIECE_M`], and the skipped part counts as
+//! visible: the output can only be smaller than the true hidden set, never larger.
+//! Only blockers meeting the convex hull of the cell and the current piece are searched (a
+//! spatial grid, then a floating-point filter that drops only blockers clear of the hull; leaving
+//! a blocker out can only certify less).
 
 use glam::DVec2;
 
 use super::predicates::{
-    common_tangents, convex_interiors_disjoint, orient, point_in_convex, segment_meets_convex,
-    set_side, tangent_vertices, Containment, Orientation, SetSide,
+    common_tangents, orient, point_in_convex, set_side,
+    tangent_vertices, Containment, Orientation, SetSide,
 };
 
-/// Pieces shorter than this are not split further; an uncertified one counts as visible, metres.
+/// Least step of the sweep past a point it cannot certify, metres.
 pub const MIN_PIECE_M: f64 = 0.01;
-/// Deepest bisection.
-pub const MAX_DEPTH: u32 = 30;
-/// Most bisections of a piece in [`Verifier::is_hidden`] (pieces down to 1/1024 of the segment).
-pub const CHECK_DEPTH: u32 = 10;
+/// Parameters along a verified segment are multiples of `2^-PARAM_BITS`.
+pub const PARAM_BITS: u32 = 30;
+/// The sweep's first probe ahead of its current point, metres (halved down to [`MIN_PIECE_M`]
+/// when no certificate holds that far).
+pub const PROBE_M: f64 = 1.0;
+
+const END: u64 = 1 << PARAM_BITS;
+/// Debug counters.
+pub static STATS: [std::sync::atomic::AtomicU64; 4] = [const { std::sync::atomic::AtomicU64::new(0) }; 4];
 
 /// A hidden sub-interval of the verified segment: parameters along `a -> b` and the exact
 /// endpoints (each lies exactly on the segment).
@@ -109,11 +121,228 @@ struct Link {
     poly: usize,
 }
 
+/// One condition of a certificate at `q`: `orient(q, u, v)` is `Ccw` (strict) or not `Cw`.
+#[derive(Clone, Copy, Debug)]
+struct Cond {
+    u: DVec2,
+    v: DVec2,
+    strict: bool,
+}
+
+impl Cond {
+    fn holds(&self, q: DVec2) -> bool {
+        match orient(q, self.u, self.v) {
+            Orientation::Ccw => true,
+            Orientation::Collinear => !self.strict,
+            Orientation::Cw => false,
+        }
+    }
+
+    /// `orient(q, u, v)` in floating point, an affine function of `q`.
+    fn value(&self, q: DVec2) -> f64 {
+        (self.u - q).perp_dot(self.v - q)
+    }
+}
+
+/// The conditions (S), (A), (O) and (C) of a chain (module header).
+fn conditions(links: &[Link], cell: &[DVec2]) -> Vec<Cond> {
+    let mut c = Vec::with_capacity(3 * links.len() + 2 * cell.len());
+    for k in links {
+        let (u, v) = match k.sep.side {
+            Orientation::Ccw => (k.sep.a, k.sep.b),
+            _ => (k.sep.b, k.sep.a),
+        };
+        c.push(Cond { u, v, strict: true });
+        c.push(Cond {
+            u: k.l,
+            v: k.r,
+            strict: true,
+        });
+    }
+    for p in links.windows(2) {
+        c.push(Cond {
+            u: p[1].l,
+            v: p[0].r,
+            strict: false,
+        });
+        c.push(Cond {
+            u: p[0].r,
+            v: p[1].r,
+            strict: false,
+        });
+    }
+    if let (Some(first), Some(last)) = (links.first(), links.last()) {
+        for &v in cell {
+            c.push(Cond {
+                u: first.l,
+                v,
+                strict: false,
+            });
+            c.push(Cond {
+                u: v,
+                v: last.r,
+                strict: false,
+            });
+        }
+    }
+    c
+}
+
+/// A uniform grid of buckets over the blockers' boxes (bucket `k` holds
+/// `ids[start[k]..start[k + 1]]`; a box is listed in every bucket it meets).
+struct Grid {
+    lo: DVec2,
+    size: f64,
+    nx: usize,
+    ny: usize,
+    start: Vec<u32>,
+    ids: Vec<u32>,
+}
+
+impl Grid {
+    const SIZE_M: f64 = 32.0;
+
+    fn new(boxes: &[(DVec2, DVec2)]) -> Grid {
+        let (lo, hi) = boxes.iter().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(l, h), b| (l.min(b.0), h.max(b.1)),
+        );
+        if boxes.is_empty() || !(lo.is_finite() && hi.is_finite()) {
+            return Grid {
+                lo: DVec2::ZERO,
+                size: 1.0,
+                nx: 0,
+                ny: 0,
+                start: vec![0],
+                ids: Vec::new(),
+            };
+        }
+        let ext = hi - lo;
+        // At most about 4 buckets per box on average, so the grid stays small for wide scenes.
+        let budget = (4 * boxes.len()).max(64) as f64;
+        let size = Self::SIZE_M.max((ext.x * ext.y / budget).sqrt()).max(1e-9);
+        let nx = (ext.x / size) as usize + 1;
+        let ny = (ext.y / size) as usize + 1;
+        let mut g = Grid {
+            lo,
+            size,
+            nx,
+            ny,
+            start: vec![0; nx * ny + 1],
+            ids: Vec::new(),
+        };
+        for b in boxes {
+            let (x0, y0, x1, y1) = g.range(b.0, b.1);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    g.start[y * nx + x + 1] += 1;
+                }
+            }
+        }
+        for k in 0..nx * ny {
+            g.start[k + 1] += g.start[k];
+        }
+        let mut fill = g.start.clone();
+        g.ids = vec![0; g.start[nx * ny] as usize];
+        for (i, b) in boxes.iter().enumerate() {
+            let (x0, y0, x1, y1) = g.range(b.0, b.1);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let k = y * nx + x;
+                    g.ids[fill[k] as usize] = i as u32;
+                    fill[k] += 1;
+                }
+            }
+        }
+        g
+    }
+
+    fn range(&self, lo: DVec2, hi: DVec2) -> (usize, usize, usize, usize) {
+        let ix = |v: f64, n: usize| (((v / self.size).floor().max(0.0)) as usize).min(n - 1);
+        let (a, b) = (lo - self.lo, hi - self.lo);
+        (
+            ix(a.x, self.nx),
+            ix(a.y, self.ny),
+            ix(b.x, self.nx),
+            ix(b.y, self.ny),
+        )
+    }
+
+    /// Ids of the boxes listed in the buckets meeting `[lo, hi]`, ascending, each once.
+    fn query(&self, lo: DVec2, hi: DVec2) -> Vec<u32> {
+        if self.nx == 0 {
+            return Vec::new();
+        }
+        let (x0, y0, x1, y1) = self.range(lo, hi);
+        let mut out = Vec::new();
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let k = y * self.nx + x;
+                out.extend_from_slice(&self.ids[self.start[k] as usize..self.start[k + 1] as usize]);
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+}
+
 /// The verifier for one cell and one set of blockers.
 pub struct Verifier<'a> {
     cell: &'a [DVec2],
     blockers: Vec<&'a [DVec2]>,
     boxes: Vec<(DVec2, DVec2)>,
+    grid: Grid,
+}
+
+/// Parameters `j / 2^PARAM_BITS` along one segment, turned into exact points of it.
+struct Param {
+    a: DVec2,
+    b: DVec2,
+    d: DVec2,
+}
+
+impl Param {
+    /// The point at parameter `j`, when `a + (j / 2^PARAM_BITS) (b - a)` is exact.
+    fn at(&self, j: u64) -> Option<DVec2> {
+        if j == 0 {
+            return Some(self.a);
+        }
+        if j >= END {
+            return Some(self.b);
+        }
+        let t = j as f64 / END as f64;
+        let exact = |a: f64, d: f64| -> Option<f64> {
+            let u = d * t;
+            // The product is exact when its fused error is zero, the sum by TwoSum.
+            if d.mul_add(t, -u) != 0.0 {
+                return None;
+            }
+            let s = a + u;
+            let bb = s - a;
+            let err = (a - (s - bb)) + (u - bb);
+            (err == 0.0 && s.is_finite()).then_some(s)
+        };
+        Some(DVec2::new(exact(self.a.x, self.d.x)?, exact(self.a.y, self.d.y)?))
+    }
+
+    /// The exact point at `j` or, failing that, at the nearest coarser parameter in `(lo, j]`
+    /// (fewer low bits); `None` when there is none.
+    fn at_or_below(&self, j: u64, lo: u64) -> Option<(u64, DVec2)> {
+        let mut k = j;
+        let mut bit = 0;
+        while k > lo {
+            if let Some(p) = self.at(k) {
+                return Some((k, p));
+            }
+            bit += 1;
+            if bit > PARAM_BITS {
+                return None;
+            }
+            k = (j >> bit) << bit;
+        }
+        None
+    }
 }
 
 impl<'a> Verifier<'a> {
@@ -121,111 +350,195 @@ impl<'a> Verifier<'a> {
     /// (exactly 2 distinct vertices).
     pub fn new(cell: &'a [DVec2], blockers: impl IntoIterator<Item = &'a [DVec2]>) -> Self {
         let blockers: Vec<&[DVec2]> = blockers.into_iter().collect();
-        let boxes = blockers.iter().map(|b| bbox(b)).collect();
+        let boxes: Vec<(DVec2, DVec2)> = blockers.iter().map(|b| bbox(b)).collect();
+        let grid = Grid::new(&boxes);
         Verifier {
             cell,
             blockers,
             boxes,
+            grid,
         }
     }
 
-    /// The blockers that may block a segment from the cell to `[a, b]`.
+    /// The blockers that may block a segment from the cell to `[a, b]`: those meeting the
+    /// convex hull of the cell and the segment (a float filter that drops only blockers clear of
+    /// it by a margin; every segment from the cell to `[a, b]` lies in the hull, and leaving a
+    /// blocker out can only certify less).
     fn near(&self, a: DVec2, b: DVec2) -> Vec<&'a [DVec2]> {
-        // Only blockers whose box meets the hull of the cell and the segment can block.
-        let (mut lo, mut hi) = bbox(self.cell);
-        lo = lo.min(a).min(b);
-        hi = hi.max(a).max(b);
-        let near: Vec<&[DVec2]> = self
-            .blockers
-            .iter()
-            .zip(&self.boxes)
-            .filter(|(_, (bl, bh))| bl.x <= hi.x && bh.x >= lo.x && bl.y <= hi.y && bh.y >= lo.y)
-            .map(|(b, _)| *b)
-            .collect();
-        // Every segment from the cell to [a, b] lies in their convex hull; a polygon whose
-        // interior misses the hull can at most touch such segments on its boundary. Leaving it
-        // out can only certify less, never more. A wall segment is kept when it meets the closed
-        // hull: one lying on the hull's boundary may hold part of [a, b] (a VO along a facade).
         let hull = convex_hull(self.cell.iter().copied().chain([a, b]));
-        if hull.len() >= 3 {
-            near.into_iter()
-                .filter(|b| match b.len() {
-                    2 => segment_meets_convex(b[0], b[1], &hull),
-                    _ => !convex_interiors_disjoint(&hull, b),
-                })
-                .collect()
-        } else {
-            near
-        }
+        let (lo, hi) = bbox(&hull);
+        let edges: Vec<(DVec2, DVec2)> = (0..hull.len())
+            .map(|i| (hull[i], hull[(i + 1) % hull.len()]))
+            .collect();
+        self.grid
+            .query(lo, hi)
+            .into_iter()
+            .filter(|&i| {
+                let (bl, bh) = self.boxes[i as usize];
+                if bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y {
+                    return false;
+                }
+                let poly = self.blockers[i as usize];
+                // Clear of the hull: every vertex right of one hull edge by a margin.
+                hull.len() < 3
+                    || !edges.iter().any(|&(u, v)| {
+                        let w = v - u;
+                        let m = 1e-9 * (w.length() + 1.0) * (1.0 + u.abs().max_element());
+                        poly.iter().all(|&p| w.perp_dot(p - u) < -m)
+                    })
+            })
+            .map(|i| self.blockers[i as usize])
+            .collect()
     }
 
     /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
     pub fn hidden_parts(&self, a: DVec2, b: DVec2) -> Vec<Hidden> {
-        let near = self.near(a, b);
+        self.sweep(a, b, false)
+    }
+
+    /// True when the whole closed segment `[a, b]` is certified hidden: the same sweep as
+    /// [`Self::hidden_parts`], stopping at the first point it cannot certify.
+    pub fn is_hidden(&self, a: DVec2, b: DVec2) -> bool {
+        let parts = self.sweep(a, b, true);
+        matches!(parts[..], [h] if h.p0 == a && h.p1 == b)
+    }
+
+    fn sweep(&self, a: DVec2, b: DVec2, stop_at_gap: bool) -> Vec<Hidden> {
         let mut out: Vec<Hidden> = Vec::new();
-        let mut stack = vec![(0.0f64, 1.0f64, a, b, 0u32)];
-        // Depth-first, left piece first, so pieces come out in order.
-        while let Some((t0, t1, p0, p1, depth)) = stack.pop() {
-            if self.certify(&near, p0, p1) {
-                match out.last_mut() {
-                    Some(h) if h.p1 == p0 => {
-                        h.t1 = t1;
-                        h.p1 = p1;
+        let len = a.distance(b);
+        if !(len > 0.0 && len.is_finite()) {
+            return out;
+        }
+        let par = Param { a, b, d: b - a };
+        let steps = |m: f64| ((m / len * END as f64) as u64).clamp(1, END);
+        let (min_step, probe) = (steps(MIN_PIECE_M), steps(PROBE_M));
+        let mut j = 0u64;
+        let mut gap = min_step;
+        while j < END {
+            let Some(q) = par.at(j) else { break };
+            match self.piece_from(&par, j, q, probe, min_step) {
+                Some((e, pe)) => {
+                    match out.last_mut() {
+                        Some(h) if h.p1 == q => {
+                            h.t1 = e as f64 / END as f64;
+                            h.p1 = pe;
+                        }
+                        _ => out.push(Hidden {
+                            t0: j as f64 / END as f64,
+                            t1: e as f64 / END as f64,
+                            p0: q,
+                            p1: pe,
+                        }),
                     }
-                    _ => out.push(Hidden { t0, t1, p0, p1 }),
+                    j = e;
+                    gap = min_step;
                 }
-                continue;
-            }
-            if depth >= MAX_DEPTH || p0.distance(p1) < 2.0 * MIN_PIECE_M {
-                continue;
-            }
-            if let Some(m) = exact_midpoint(p0, p1) {
-                let tm = 0.5 * (t0 + t1);
-                stack.push((tm, t1, m, p1, depth + 1));
-                stack.push((t0, tm, p0, m, depth + 1));
+                None => {
+                    if stop_at_gap {
+                        break;
+                    }
+                    let Some((k, _)) = par.at_or_below((j + gap).min(END), j) else {
+                        break;
+                    };
+                    j = k;
+                    gap = gap.saturating_mul(2);
+                }
             }
         }
         out
     }
 
-    /// True when the whole closed segment `[a, b]` is certified hidden. Same certificates as
-    /// [`Self::hidden_parts`], but it stops at the first piece that cannot be certified, and
-    /// splits at most [`CHECK_DEPTH`] times: a yes/no answer for the bake's final gate.
-    pub fn is_hidden(&self, a: DVec2, b: DVec2) -> bool {
-        let near = self.near(a, b);
-        let mut stack = vec![(a, b, 0u32)];
-        while let Some((p0, p1, depth)) = stack.pop() {
-            if self.certify(&near, p0, p1) {
-                continue;
+    /// The longest certified piece `[j, e]` the sweep finds from the point `q` at parameter
+    /// `j`: its end parameter and point.
+    fn piece_from(
+        &self,
+        par: &Param,
+        j: u64,
+        q: DVec2,
+        probe: u64,
+        min_step: u64,
+    ) -> Option<(u64, DVec2)> {
+        let mut s = probe;
+        loop {
+            let (k, p) = par.at_or_below((j + s).min(END), j)?;
+            if let Some(e) = self.extend(par, j, q, k, p) {
+                return Some(e);
             }
-            if depth >= CHECK_DEPTH || p0.distance(p1) < 2.0 * MIN_PIECE_M {
-                return false;
+            if s <= min_step {
+                return None;
             }
-            match exact_midpoint(p0, p1) {
-                Some(m) => {
-                    stack.push((m, p1, depth + 1));
-                    stack.push((p0, m, depth + 1));
-                }
-                None => return false,
-            }
+            s /= 2;
         }
-        true
     }
 
-    /// Looks for a certificate that holds at both ends of `[p0, p1]` (and at an exact point
-    /// between), with chords read off at that point.
-    fn certify(&self, near: &[&[DVec2]], p0: DVec2, p1: DVec2) -> bool {
-        // A piece inside one (convex) blocker: every segment to it meets that blocker.
-        let inside = |b: &[DVec2], p| point_in_convex(b, p) != Containment::Outside;
-        if near.iter().any(|b| inside(b, p0) && inside(b, p1)) {
-            return true;
+    /// Given the piece `[q, p]` (parameters `j < k`), a certificate for it, extended as far
+    /// along the segment as it holds: the end parameter and point.
+    fn extend(&self, par: &Param, j: u64, q: DVec2, k: u64, p: DVec2) -> Option<(u64, DVec2)> {
+        let near = self.near(q, p);
+        STATS[0].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        STATS[1].fetch_add(near.len() as u64, std::sync::atomic::Ordering::Relaxed);
+        // Inside one blocker: the piece up to where the segment leaves it.
+        let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
+        if let Some(&blk) = near.iter().find(|b| inside(b, q) && inside(b, p)) {
+            let exit = exit_param(blk, par, j);
+            return Some(self.furthest(par, k, p, exit, &|x| inside(blk, x)));
         }
-        let anchor = exact_midpoint(p0, p1).unwrap_or(p0);
-        let pts = [anchor, p0, p1];
-        match self.chain(near, &pts) {
-            Some(links) => pts.iter().all(|&q| self.holds(&links, q)),
-            None => false,
+        let anchor = exact_midpoint(q, p).unwrap_or(q);
+        let pts = [anchor, q, p];
+        let links = self.chain(&near, &pts)?;
+        STATS[2].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        STATS[3].fetch_add(links.len() as u64, std::sync::atomic::Ordering::Relaxed);
+        let conds = conditions(&links, self.cell);
+        if !pts.iter().all(|&x| conds.iter().all(|c| c.holds(x))) {
+            return None;
         }
+        // Where the first condition stops holding, estimated from its affine values at q and b.
+        let mut t = 1.0f64;
+        for c in &conds {
+            let (f0, f1) = (c.value(q), c.value(par.b));
+            if f1 < 0.0 && f0 > 0.0 {
+                t = t.min(f0 / (f0 - f1));
+            } else if f1 <= 0.0 && f0 <= 0.0 {
+                t = 0.0;
+            }
+        }
+        let est = j + ((END - j) as f64 * t) as u64;
+        Some(self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x))))
+    }
+
+    /// The largest exact parameter in `[k, est]` whose point passes `ok`, by checking `est` and
+    /// then searching back towards `k` (whose point `p` passed).
+    fn furthest(
+        &self,
+        par: &Param,
+        k: u64,
+        p: DVec2,
+        est: u64,
+        ok: &dyn Fn(DVec2) -> bool,
+    ) -> (u64, DVec2) {
+        let (mut good, mut gp) = (k, p);
+        let mut bad = est.min(END) + 1;
+        if est > k {
+            if let Some((e, pe)) = par.at_or_below(est.min(END), k) {
+                if ok(pe) {
+                    return (e, pe);
+                }
+                bad = e;
+            }
+        }
+        // Binary search between a passing and a failing parameter.
+        while bad > good + 1 {
+            let mid = good + (bad - good) / 2;
+            match par.at_or_below(mid, good) {
+                Some((m, pm)) if ok(pm) => {
+                    good = m;
+                    gp = pm;
+                }
+                Some((m, _)) => bad = m,
+                None => break,
+            }
+        }
+        (good, gp)
     }
 
     /// The shortest chain of blocker chords whose conditions (S), (A), (O) and (C) hold at every
@@ -262,21 +575,21 @@ impl<'a> Verifier<'a> {
                     }
                 }
             }
-            let mut sep = None;
             for &l in &ls {
                 for &r in &rs {
-                    if !all(&|p| orient(p, l, r) == Ccw) {
-                        continue;
-                    }
-                    if sep.is_none() {
-                        sep = Some(separating_line(b, self.cell, pts));
-                    }
-                    if let Some(Some(sep)) = sep {
+                    if all(&|p| orient(p, l, r) == Ccw) {
+                        // The separating line comes later, only for arcs the cover picks.
+                        let sep = SepLine { a: l, b: r, side: Ccw };
                         arcs.push(Link { l, r, sep, poly });
                     }
                 }
             }
         }
+        // Separating lines per blocker, found when first needed (None inside: none exists).
+        let mut seps: Vec<Option<Option<SepLine>>> = vec![None; near.len()];
+        let mut sep_of = |poly: usize| -> Option<SepLine> {
+            *seps[poly].get_or_insert_with(|| separating_line(near[poly], self.cell, pts))
+        };
         let starts = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, k.l, c) != Cw));
         let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, c, k.r) != Cw));
         let overlaps =
@@ -302,26 +615,44 @@ impl<'a> Verifier<'a> {
             })
         };
         let joins = |a: &Link, b: &Link| overlaps(a, b) || shared(a, b).is_some();
-        // Breadth-first from every start arc; `prev` records the path.
-        let n = arcs.len();
-        let mut prev: Vec<Option<usize>> = vec![None; n];
-        let mut seen = vec![false; n];
-        let mut queue = std::collections::VecDeque::new();
-        for (i, a) in arcs.iter().enumerate() {
-            if starts(a) {
-                seen[i] = true;
-                queue.push_back(i);
+        // Greedy cover, as for intervals on a line: from the start arc reaching furthest
+        // counter-clockwise (seen from the anchor), repeatedly the joining arc that reaches
+        // furthest, while it advances.
+        let further = |x: &Link, y: &Link| orient(q, y.r, x.r) == Ccw;
+        let mut usable = vec![true; arcs.len()];
+        let mut path: Vec<Link> = Vec::new();
+        loop {
+            let prev = path.last().copied();
+            let mut best: Option<usize> = None;
+            for (j, b) in arcs.iter().enumerate() {
+                if !usable[j] || best.is_some_and(|k| !further(b, &arcs[k])) {
+                    continue;
+                }
+                let ok = match &prev {
+                    None => starts(b),
+                    Some(c) => further(b, c) && joins(c, b),
+                };
+                if ok {
+                    best = Some(j);
+                }
+            }
+            let k = best?;
+            match sep_of(arcs[k].poly) {
+                Some(sep) => {
+                    arcs[k].sep = sep;
+                    path.push(arcs[k]);
+                    if ends(&arcs[k]) {
+                        break;
+                    }
+                    if path.len() > arcs.len() {
+                        return None;
+                    }
+                }
+                None => usable[k] = false,
             }
         }
-        while let Some(i) = queue.pop_front() {
-            if ends(&arcs[i]) {
-                let mut path = vec![arcs[i]];
-                let mut k = i;
-                while let Some(j) = prev[k] {
-                    path.push(arcs[j]);
-                    k = j;
-                }
-                path.reverse();
+        {
+            {
                 for k in 0..path.len() - 1 {
                     if !overlaps(&path[k], &path[k + 1]) {
                         if let Some(v) = shared(&path[k], &path[k + 1]) {
@@ -330,37 +661,11 @@ impl<'a> Verifier<'a> {
                         }
                     }
                 }
-                return Some(path);
-            }
-            for j in 0..n {
-                if !seen[j] && joins(&arcs[i], &arcs[j]) {
-                    seen[j] = true;
-                    prev[j] = Some(i);
-                    queue.push_back(j);
-                }
             }
         }
-        None
+        Some(path)
     }
 
-    /// Checks the certificate's conditions (module header) at `q`.
-    fn holds(&self, links: &[Link], q: DVec2) -> bool {
-        use Orientation::*;
-        let o = |u: DVec2, v: DVec2| orient(q, u, v);
-        if links.is_empty() || links.iter().any(|k| !k.sep.holds(q) || o(k.l, k.r) != Ccw) {
-            return false;
-        }
-        // (O): each chord's end lies in the next arc.
-        if links
-            .windows(2)
-            .any(|p| o(p[1].l, p[0].r) == Cw || o(p[0].r, p[1].r) == Cw)
-        {
-            return false;
-        }
-        // (C): every cell vertex inside the sweep from l_1 to r_m.
-        let (l1, rm) = (links[0].l, links[links.len() - 1].r);
-        self.cell.iter().all(|&c| o(l1, c) != Cw && o(c, rm) != Cw)
-    }
 }
 
 /// A line through two input vertices with the blocker `b` on one closed side and the cell on the
@@ -419,6 +724,26 @@ pub fn exact_midpoint(p: DVec2, q: DVec2) -> Option<DVec2> {
     let m = DVec2::new(sx * 0.5, sy * 0.5);
     // Halving is exact unless it underflows.
     (m.x * 2.0 == sx && m.y * 2.0 == sy && m != p && m != q).then_some(m)
+}
+
+/// The parameter (along `par`, from `j`) where the segment leaves the convex `blk`, estimated
+/// in floating point (the caller checks the point it gets exactly).
+fn exit_param(blk: &[DVec2], par: &Param, j: u64) -> u64 {
+    let t0 = j as f64 / END as f64;
+    let mut t1 = 1.0f64;
+    let n = blk.len();
+    for i in 0..n {
+        let (u, v) = (blk[i], blk[(i + 1) % n]);
+        let w = v - u;
+        // Inside is left of u -> v: w x (x - u) >= 0 along x = a + t d.
+        let f0 = w.perp_dot(par.a - u);
+        let fd = w.perp_dot(par.d);
+        if fd < 0.0 {
+            t1 = t1.min(-f0 / fd);
+        }
+    }
+    let t = t1.max(t0);
+    ((t * END as f64) as u64).min(END)
 }
 
 /// Convex hull, counter-clockwise, without collinear points (Andrew's monotone chain with exact

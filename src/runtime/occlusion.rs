@@ -67,6 +67,13 @@ pub struct PreparedVo {
     /// `c_b` is the corner whose `b - c` is most clockwise. (Near-parallel candidates differ by
     /// rounding only, far below [`MARGIN_M`].)
     planes: [[f64; 3]; 3],
+    /// The VO's endpoints (shrunk, oriented with the cell on the left of `a -> b`).
+    a: [f64; 2],
+    b: [f64; 2],
+    /// The grown cell's corners.
+    cs: [[f64; 2]; 4],
+    /// Least distance between the grown cell and the VO (rounded down).
+    d_near: f64,
 }
 
 /// `orient(u, v, p)` as a linear form in `p`.
@@ -126,13 +133,76 @@ impl PreparedVo {
         let l = linear(a, b);
         // orient(c, p, b) = orient(b, c, p).
         let planes = [[-l[0], -l[1], -l[2]], linear(ca, a), linear(b, cb)];
+        let mut d_near = f64::INFINITY;
+        for c in cs {
+            d_near = d_near.min(point_segment(c, a, b));
+        }
+        for p in [a, b] {
+            d_near = d_near.min(point_rect(p, view.rect) - MARGIN_M);
+        }
         PreparedVo {
             planes,
             g: vo.g,
             h: vo.h,
             d_far: d_far + MARGIN_M,
             usable,
+            a,
+            b,
+            cs,
+            d_near: (d_near - MARGIN_M).max(0.0),
         }
+    }
+
+    /// The tighter height factor `1 / mu` of rule 3 for a footprint `[x0, y0, x1, y1]` (grown)
+    /// lying in the umbra: `max(1, D_near / D_far', 1 + dist(F, line(s)) / D_far')`, where
+    /// `D_far'` is the greatest distance from the cell to the part of the VO that segments
+    /// from the cell to the footprint can cross (ARCHITECTURE.md, "Rule 3, the tighter bound").
+    fn factor(&self, fp: [f64; 4], d_near: f64) -> f64 {
+        let m = MARGIN_M;
+        let (a, b) = (self.a, self.b);
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l2 = d[0] * d[0] + d[1] * d[1];
+        let len = l2.sqrt();
+        let cross = |u: [f64; 2], v: [f64; 2]| u[0] * v[1] - u[1] * v[0];
+        let ws = [[fp[0], fp[1]], [fp[2], fp[1]], [fp[2], fp[3]], [fp[0], fp[3]]];
+        // Crossings of the segments between corners of the cell and of the footprint with the
+        // VO's line: their parameters along a -> b bound those of every such segment.
+        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+        for c in self.cs {
+            for w in ws {
+                let cw = [w[0] - c[0], w[1] - c[1]];
+                let den = cross(cw, d);
+                if !(den.abs() > 0.0) {
+                    return 1.0;
+                }
+                let u = cross([a[0] - c[0], a[1] - c[1]], d) / den;
+                let x = [c[0] + u * cw[0] - a[0], c[1] + u * cw[1] - a[1]];
+                let t = (x[0] * d[0] + x[1] * d[1]) / l2;
+                t0 = t0.min(t);
+                t1 = t1.max(t);
+            }
+        }
+        let slack = m / len;
+        let (t0, t1) = ((t0 - slack).max(0.0), (t1 + slack).min(1.0));
+        if !(t0 <= t1) {
+            return 1.0;
+        }
+        let p0 = [a[0] + t0 * d[0], a[1] + t0 * d[1]];
+        let p1 = [a[0] + t1 * d[0], a[1] + t1 * d[1]];
+        let mut df: f64 = 0.0;
+        for c in self.cs {
+            for p in [p0, p1] {
+                df = df.max((c[0] - p[0]).hypot(c[1] - p[1]));
+            }
+        }
+        let df = df + m;
+        // Distance of the footprint beyond the VO's line (the cell is on its left).
+        let mut dl = f64::INFINITY;
+        for w in ws {
+            dl = dl.min(-orient(a, b, w) / len);
+        }
+        let dl = (dl - m).max(0.0);
+        (d_near / df).max(1.0 + dl / df).max(1.0)
     }
 
     /// How this VO covers box `bx = [xmin, ymin, zmin, xmax, ymax, zmax]` seen from `view`.
@@ -170,7 +240,10 @@ impl PreparedVo {
         if d_near <= 0.0 {
             return Cover::Partial;
         }
-        let top = view.e1 + (self.h - view.e1) * (d_near / self.d_far).max(1.0);
+        let mut top = view.e1 + (self.h - view.e1) * (d_near / self.d_far).max(1.0);
+        if bx[5] + m > top && self.h > view.e1 {
+            top = view.e1 + (self.h - view.e1) * self.factor([x0, y0, x1, y1], d_near);
+        }
         // `zmin >= g` compares stored values, with no arithmetic: exact.
         let ok = bx[2] >= self.g && view.e0 >= self.g && bx[5] + m <= top && self.h >= view.e1;
         if ok {
@@ -197,13 +270,38 @@ impl PreparedVo {
         let dx = (bounds[3] - cx0).abs().max((cx1 - bounds[0]).abs());
         let dy = (bounds[4] - cy0).abs().max((cy1 - bounds[1]).abs());
         let d_max = (dx * dx + dy * dy).sqrt() + 2.0 * MARGIN_M;
-        let top_max = view.e1 + (self.h - view.e1).max(0.0) * (d_max / self.d_far).max(1.0);
+        // Every factor of a box inside is at most 1 + d_max / d_near(s): its D_near and its
+        // distance beyond the VO's line are at most d_max, and D_far' >= d_near(s).
+        let top_max = if self.d_near > 0.0 {
+            view.e1 + (self.h - view.e1).max(0.0) * (1.0 + d_max / self.d_near)
+        } else {
+            f64::INFINITY
+        };
         if min_top > top_max + MARGIN_M {
             Cover::Outside
         } else {
             Cover::Partial
         }
     }
+}
+
+/// Least distance from `p` to the segment `[a, b]`.
+fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let l2 = d[0] * d[0] + d[1] * d[1];
+    let t = if l2 > 0.0 {
+        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * d[0]).hypot(p[1] - a[1] - t * d[1])
+}
+
+/// Least distance from `p` to the rectangle `[x0, y0, x1, y1]`.
+fn point_rect(p: [f64; 2], r: [f64; 4]) -> f64 {
+    let dx = (r[0] - p[0]).max(p[0] - r[2]).max(0.0);
+    let dy = (r[1] - p[1]).max(p[1] - r[3]).max(0.0);
+    dx.hypot(dy)
 }
 
 /// Whether `vo` hides box `bx` from `view` (rule 3).

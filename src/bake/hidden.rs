@@ -1,0 +1,350 @@
+//! Sampled from-region visibility: which points around a cell are hidden from it, as a raster.
+//!
+//! Input: a cell (convex, counter-clockwise rectangle), the blocker edges of one slice (2D
+//! segments, each facing outwards from its blocker), and a [`MapParams`] (eyes on the cell's
+//! boundary, angular bins, pixel size, window).
+//! Output: a [`HiddenMap`]: a square raster around the cell centre whose pixels are marked
+//! *visible* when some sampled ray from some eye reaches them before meeting an edge; the others
+//! count as hidden.
+//! Method: per eye, a polar depth buffer (the distance to the first edge along the central ray
+//! of each angular bin, edges taken near to far and skipped when a coarse tile maximum shows them
+//! wholly behind what is already there), then every bin's ray marks the pixels it crosses up to
+//! that depth.
+//! Invariant: a proposal only, sampled in floating point. Nothing here decides occlusion: a
+//! segment lying in hidden pixels is a candidate VO, which the exact verifier alone certifies
+//! (`super::certify`). Sampling can miss a narrow view (a gap thinner than a bin, an eye
+//! position between samples); the verifier then cuts the candidate there.
+
+use glam::DVec2;
+
+/// How finely a [`HiddenMap`] samples visibility.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapParams {
+    /// Eyes on the cell's boundary: its corners, and this many points on each edge between them.
+    pub edge_eyes: usize,
+    /// Angular bins of each eye's depth buffer (a multiple of [`TILE`]).
+    pub bins: usize,
+    /// Side of a pixel, metres.
+    pub px: f64,
+    /// Half the side of the square raster, metres, around the cell centre.
+    pub half: f64,
+}
+
+impl Default for MapParams {
+    fn default() -> Self {
+        MapParams {
+            edge_eyes: 7,
+            bins: 1024,
+            px: 4.0,
+            half: 512.0,
+        }
+    }
+}
+
+/// Bins per tile of the coarse maximum used to skip hidden edges.
+pub const TILE: usize = 16;
+
+/// A pseudo-angle of direction `d`, monotone in the true angle, in `[0, 4)`.
+#[inline]
+pub fn pseudo_angle(d: DVec2) -> f64 {
+    let s = d.x.abs() + d.y.abs();
+    if s == 0.0 {
+        return 0.0;
+    }
+    let t = d.y / s;
+    if d.x >= 0.0 {
+        if t >= 0.0 {
+            t
+        } else {
+            4.0 + t
+        }
+    } else {
+        2.0 - t
+    }
+}
+
+/// The unit direction of pseudo-angle `p`.
+fn direction(p: f64) -> DVec2 {
+    let (x, y) = if p < 1.0 {
+        (1.0 - p, p)
+    } else if p < 2.0 {
+        (1.0 - p, 2.0 - p)
+    } else if p < 3.0 {
+        (p - 3.0, 2.0 - p)
+    } else {
+        (p - 3.0, p - 4.0)
+    };
+    DVec2::new(x, y).normalize()
+}
+
+/// The visible pixels around one cell for one slice.
+#[derive(Clone, Debug)]
+pub struct HiddenMap {
+    /// Lower-left corner of pixel (0, 0).
+    pub lo: DVec2,
+    pub px: f64,
+    /// Pixels per side.
+    pub n: usize,
+    visible: Vec<u64>,
+}
+
+impl HiddenMap {
+    /// Marks visible the pixel at raster position `q` (in pixels), if inside.
+    #[inline]
+    fn mark(&mut self, q: DVec2) {
+        if q.x >= 0.0 && q.y >= 0.0 {
+            let (ix, iy) = (q.x as usize, q.y as usize);
+            if ix < self.n && iy < self.n {
+                let k = iy * self.n + ix;
+                self.visible[k >> 6] |= 1 << (k & 63);
+            }
+        }
+    }
+
+    /// Whether pixel `(ix, iy)` counts as hidden (outside the raster: no).
+    #[inline]
+    pub fn hidden_px(&self, ix: i64, iy: i64) -> bool {
+        if ix < 0 || iy < 0 || ix >= self.n as i64 || iy >= self.n as i64 {
+            return false;
+        }
+        let k = iy as usize * self.n + ix as usize;
+        self.visible[k >> 6] & (1 << (k & 63)) == 0
+    }
+
+    /// Whether the pixel holding `p` counts as hidden.
+    #[inline]
+    pub fn hidden(&self, p: DVec2) -> bool {
+        let f = (p - self.lo) / self.px;
+        // Truncation is floor for non-negative values (and avoids a libm call).
+        if !(f.x >= 0.0 && f.y >= 0.0) {
+            return false;
+        }
+        self.hidden_px(f.x as i64, f.y as i64)
+    }
+
+    /// Share of the raster's pixels that count as hidden.
+    pub fn hidden_share(&self) -> f64 {
+        let vis: u32 = self.visible.iter().map(|w| w.count_ones()).sum();
+        1.0 - vis as f64 / (self.n * self.n) as f64
+    }
+
+    /// Builds the map of `cell` from the outward-facing `edges` of the slice's blockers.
+    pub fn build(cell: &[DVec2; 4], edges: &[(DVec2, DVec2)], p: &MapParams) -> HiddenMap {
+        let centre = (cell[0] + cell[2]) * 0.5;
+        let n = ((2.0 * p.half) / p.px).ceil() as usize;
+        let mut map = HiddenMap {
+            lo: centre - DVec2::splat(p.half),
+            px: p.px,
+            n,
+            visible: vec![0; (n * n).div_ceil(64)],
+        };
+        let bins = p.bins.max(TILE) / TILE * TILE;
+        let scale = bins as f64 / 4.0;
+        let dirs: Vec<DVec2> = (0..bins)
+            .map(|k| direction((k as f64 + 0.5) / scale))
+            .collect();
+        // Edges near the cell first, so that far ones are mostly skipped.
+        let mut order: Vec<(f64, usize)> = edges
+            .iter()
+            .enumerate()
+            .map(|(i, (u, v))| (u.distance_squared(centre).min(v.distance_squared(centre)), i))
+            .collect();
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let far = p.half * std::f64::consts::SQRT_2 + p.px;
+        let mut depth = vec![far; bins];
+        let mut tile = vec![far; bins / TILE];
+        // Eyes on each edge, with the outward normal of that edge (corners: of both edges). A ray
+        // into the cell crosses it and leaves through another edge, whose own eyes see beyond
+        // it, so only rays leaving the cell are cast.
+        let mut eyes: Vec<(DVec2, DVec2, DVec2)> = Vec::new();
+        for i in 0..4 {
+            let (a, b) = (cell[i], cell[(i + 1) % 4]);
+            let out = (b - a).perp() * -1.0;
+            let prev = (a - cell[(i + 3) % 4]).perp() * -1.0;
+            eyes.push((a, out, prev));
+            for k in 1..=p.edge_eyes {
+                eyes.push((a + (b - a) * (k as f64 / (p.edge_eyes + 1) as f64), out, out));
+            }
+        }
+        for &(e, out1, out2) in &eyes {
+            depth.fill(far);
+            tile.fill(far);
+            for &(_, i) in &order {
+                let (u, v) = edges[i];
+                // Front-facing only: the eye strictly on the outer (right) side.
+                let side = (v - u).perp_dot(e - u);
+                if side >= 0.0 {
+                    continue;
+                }
+                let dmin = seg_distance(e, u, v);
+                if dmin >= far {
+                    continue;
+                }
+                // Seen from e, the edge runs counter-clockwise from v to u.
+                let (pa, pb) = (pseudo_angle(v - e), pseudo_angle(u - e));
+                // Bins whose central ray lies within the edge's angular span.
+                let first = |a: f64| ((a * scale - 0.5).ceil().max(0.0)) as usize;
+                let last = |b: f64| (b * scale - 0.5).floor();
+                let ranges: [(usize, usize); 2] = if pa <= pb {
+                    let l = last(pb);
+                    if l < 0.0 {
+                        continue;
+                    }
+                    [(first(pa), (l as usize).min(bins - 1)), (1, 0)]
+                } else {
+                    let l = last(pb);
+                    let tail = if l < 0.0 {
+                        (1, 0)
+                    } else {
+                        (0, (l as usize).min(bins - 1))
+                    };
+                    [(first(pa), bins - 1), tail]
+                };
+                for (r0, r1) in ranges {
+                    if r0 > r1 {
+                        continue;
+                    }
+                    let (t0, t1) = (r0 / TILE, r1 / TILE);
+                    if (t0..=t1).all(|t| tile[t] <= dmin) {
+                        continue;
+                    }
+                    let w = v - u;
+                    let num = (u - e).perp_dot(w);
+                    for k in r0..=r1 {
+                        let den = dirs[k].perp_dot(w);
+                        if den == 0.0 {
+                            continue;
+                        }
+                        let t = num / den;
+                        if t >= 0.0 && t < depth[k] {
+                            depth[k] = t;
+                        }
+                    }
+                    for t in t0..=t1 {
+                        tile[t] = depth[t * TILE..(t + 1) * TILE]
+                            .iter()
+                            .fold(0.0f64, |m, &d| m.max(d));
+                    }
+                }
+            }
+            // March every outward bin's ray up to its depth, marking the pixels it crosses.
+            let step = 0.5 * p.px;
+            let o = (e - map.lo) / p.px;
+            for k in 0..bins {
+                let d = dirs[k];
+                if d.dot(out1) < 0.0 && d.dot(out2) < 0.0 {
+                    continue;
+                }
+                let len = depth[k].min(far);
+                let steps = (len / step) as usize;
+                let dd = d * (step / p.px);
+                let mut q = o;
+                for _ in 0..=steps {
+                    map.mark(q);
+                    q += dd;
+                }
+                // The pixel holding the end point (the surface itself).
+                map.mark(o + d * (len / p.px));
+            }
+        }
+        map
+    }
+}
+
+/// Least distance from `p` to the segment `[a, b]`.
+fn seg_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let d = b - a;
+    let l2 = d.length_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + d * t)
+}
+
+/// The outward-facing boundary edges of a set of blockers: every edge of every convex polygon,
+/// counter-clockwise, except an edge whose reverse is an edge of another polygon of the set (the
+/// inside of a footprint split into pieces). A 2-vertex blocker (a wall) gives both directions.
+pub fn boundary_edges<'a>(polys: impl Iterator<Item = &'a [DVec2]>) -> Vec<(DVec2, DVec2)> {
+    let mut all: Vec<(DVec2, DVec2)> = Vec::new();
+    for p in polys {
+        match p.len() {
+            0 | 1 => {}
+            2 => {
+                all.push((p[0], p[1]));
+                all.push((p[1], p[0]));
+            }
+            n => {
+                for i in 0..n {
+                    all.push((p[i], p[(i + 1) % n]));
+                }
+            }
+        }
+    }
+    let key = |u: DVec2, v: DVec2| (u.x.to_bits(), u.y.to_bits(), v.x.to_bits(), v.y.to_bits());
+    let mut keys: Vec<(u64, u64, u64, u64)> = all.iter().map(|&(u, v)| key(u, v)).collect();
+    keys.sort_unstable();
+    all.into_iter()
+        .filter(|&(u, v)| keys.binary_search(&key(v, u)).is_err())
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sq(x0: f64, y0: f64, s: f64) -> Vec<DVec2> {
+        vec![
+            DVec2::new(x0, y0),
+            DVec2::new(x0 + s, y0),
+            DVec2::new(x0 + s, y0 + s),
+            DVec2::new(x0, y0 + s),
+        ]
+    }
+
+    #[test]
+    fn pseudo_angle_is_monotone_and_inverts() {
+        let mut last = -1.0;
+        for k in 0..3600 {
+            let a = std::f64::consts::TAU * k as f64 / 3600.0;
+            let p = pseudo_angle(DVec2::new(a.cos(), a.sin()));
+            assert!(p > last, "at {k}");
+            last = p;
+            let d = direction(p);
+            assert!((d - DVec2::new(a.cos(), a.sin())).length() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_wall_hides_what_is_behind_it_and_not_beside_it() {
+        let cell = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(100.0, 0.0),
+            DVec2::new(100.0, 100.0),
+            DVec2::new(0.0, 100.0),
+        ];
+        // A 600 m long, 10 m deep row 30 m north of the cell.
+        let row = vec![
+            DVec2::new(-250.0, 130.0),
+            DVec2::new(350.0, 130.0),
+            DVec2::new(350.0, 140.0),
+            DVec2::new(-250.0, 140.0),
+        ];
+        let edges = boundary_edges([row.as_slice()].into_iter());
+        let map = HiddenMap::build(&cell, &edges, &MapParams::default());
+        assert!(map.hidden(DVec2::new(50.0, 200.0)));
+        assert!(map.hidden(DVec2::new(-100.0, 160.0)));
+        assert!(!map.hidden(DVec2::new(50.0, 120.0)), "in front of the row");
+        assert!(!map.hidden(DVec2::new(500.0, 200.0)), "beyond its end");
+        assert!(!map.hidden(DVec2::new(50.0, -200.0)), "the other side");
+    }
+
+    #[test]
+    fn shared_edges_of_pieces_are_inside() {
+        let a = sq(0.0, 0.0, 10.0);
+        let b = sq(10.0, 0.0, 10.0);
+        let e = boundary_edges([a.as_slice(), b.as_slice()].into_iter());
+        assert_eq!(e.len(), 6);
+    }
+}
