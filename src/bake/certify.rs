@@ -16,9 +16,9 @@
 use glam::DVec2;
 
 use super::quantize::{quantize, Refused};
-use super::slice::{d_near, Support};
+use super::slice::Support;
 use crate::geom::verify::Verifier;
-use crate::runtime::frame::{Frame, QVo, VoGeom};
+use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
 
 /// Lower levels tried when a proposal fails at its own.
@@ -29,11 +29,13 @@ pub struct Certifier<'a> {
     pub frame: &'a Frame,
     pub id: CellId,
     pub ground: u8,
-    pub cell: [DVec2; 4],
+    pub cell: &'a [DVec2; 4],
     /// Eye heights and ground height: `(e0, e1, g)`.
     pub heights: (f64, f64, f64),
     /// Usable blockers: polygon and rule-2 support.
     pub blockers: Vec<(&'a [DVec2], Support)>,
+    /// One verifier per height level, built when first needed.
+    pub verifiers: [std::cell::OnceCell<Verifier<'a>>; HEIGHT_LEVELS as usize],
 }
 
 /// A stored VO and where it came from.
@@ -63,108 +65,98 @@ pub struct CertifyStats {
 }
 
 impl<'a> Certifier<'a> {
-    /// The verifier over the blockers that support a VO of top `h` on segment `a`–`b`.
-    fn verifier(&self, h: f64, a: DVec2, b: DVec2) -> Verifier<'_> {
-        let (e0, e1, g) = self.heights;
-        let dn = d_near(&self.cell, &[a, b]);
-        Verifier::new(
-            &self.cell,
-            self.blockers
-                .iter()
-                .filter(|(_, s)| s.supports(e0, e1, g, h, dn))
-                .map(|(p, _)| *p),
-        )
+    /// The verifier of `level`: over the blockers that support a VO of that level's top
+    /// wherever it stands (rule 2 with the ratio at its cap of 1: `t >= h`), so that one
+    /// verifier, and the certificates it caches, serve every VO of the level.
+    fn verifier(&self, level: u8) -> &Verifier<'a> {
+        self.verifiers[level as usize].get_or_init(|| {
+            let (e0, e1, g) = self.heights;
+            let h = self.frame.vo_top(e1, level);
+            Verifier::new(
+                self.cell,
+                self.blockers
+                    .iter()
+                    .filter(|(_, s)| s.supports(e0, e1, g, h, f64::MIN_POSITIVE))
+                    .map(|(p, _)| *p),
+            )
+        })
     }
 
-    /// Certifies proposal `a`–`b` at `level` (or a lower one), quantized.
-    pub fn certify(
-        &self,
-        level: u8,
-        a: DVec2,
-        b: DVec2,
-        stats: &mut CertifyStats,
-    ) -> Option<Certified> {
-        let f = self.frame;
-        let (_, e1, _) = self.heights;
+    /// The certified hidden pieces of proposal `a`–`b` at `level` (or, when none, at up to
+    /// [`LEVEL_FALLBACKS`] - 1 lower levels), at least [`MIN_PIECE_M`] long, longest first.
+    pub fn pieces(&self, level: u8, a: DVec2, b: DVec2, stats: &mut CertifyStats) -> Vec<Piece> {
         stats.tried += 1;
         stats.proposed_m += a.distance(b);
-        let mut first = true;
         for level in (1..=level).rev().take(LEVEL_FALLBACKS) {
-            let h = f.vo_top(e1, level);
             stats.checks += 1;
-            let t = std::time::Instant::now();
-            let parts = self.verifier(h, a, b).hidden_parts(a, b);
-            if std::env::var("VOCC_DEBUG").is_ok() {
-                let tot: f64 = parts.iter().map(|p| p.p0.distance(p.p1)).sum();
-                let best = parts.iter().map(|p| p.p0.distance(p.p1)).fold(0.0, f64::max);
-                eprintln!(
-                    "certify level {level} len {:.1} parts {} total {:.1} best {:.1} in {:.2} ms; a {a} b {b}",
-                    a.distance(b),
-                    parts.len(),
-                    tot,
-                    best,
-                    t.elapsed().as_secs_f64() * 1e3
-                );
-                if parts.is_empty() {
-                    let (e0, e1, g) = self.heights;
-                    let dn = d_near(&self.cell, &[a, b]);
-                    let used: Vec<&[DVec2]> = self
-                        .blockers
-                        .iter()
-                        .filter(|(_, s)| s.supports(e0, e1, g, h, dn))
-                        .map(|(p, _)| *p)
-                        .collect();
-                    let mut vis = Vec::new();
-                    for k in 0..=100 {
-                        let q = a + (b - a) * (k as f64 / 100.0);
-                        // rays from 400 boundary points
-                        let mut seen = false;
-                        for j in 0..400 {
-                            let t = j as f64 / 100.0;
-                            let (i, f) = (t.floor() as usize, t.fract());
-                            let c = self.cell[i] + (self.cell[(i + 1) % 4] - self.cell[i]) * f;
-                            if !used.iter().any(|p| crate::geom::predicates::segment_meets_convex(c, q, p)) {
-                                seen = true;
-                                break;
-                            }
-                        }
-                        vis.push(if seen { 'V' } else { '.' });
-                    }
-                    eprintln!("   brute: {}", vis.iter().collect::<String>());
-                }
+            let mut out: Vec<Piece> = self
+                .verifier(level)
+                .hidden_parts(a, b)
+                .into_iter()
+                .filter(|p| p.p0.distance(p.p1) >= MIN_PIECE_M)
+                .map(|p| Piece {
+                    level,
+                    a: p.p0,
+                    b: p.p1,
+                })
+                .collect();
+            if !out.is_empty() {
+                out.sort_by(|x, y| y.a.distance(y.b).total_cmp(&x.a.distance(x.b)));
+                stats.certified_m += out[0].a.distance(out[0].b);
+                return out;
             }
-            let Some(best) = parts
-                .iter()
-                .max_by(|x, y| x.p0.distance(x.p1).total_cmp(&y.p0.distance(y.p1)))
-            else {
-                first = false;
-                continue;
-            };
-            let (p0, p1) = (best.p0, best.p1);
+        }
+        Vec::new()
+    }
+
+    /// A certified piece quantized to its stored form, re-checked from the dequantized bytes
+    /// (rule 2 for that segment, then the exact verifier); lower levels when that fails.
+    pub fn store(&self, piece: &Piece, stats: &mut CertifyStats) -> Option<Certified> {
+        let f = self.frame;
+        for (n, level) in (1..=piece.level).rev().take(LEVEL_FALLBACKS).enumerate() {
             let mut checks = 0;
-            let r = quantize(f, self.id, self.ground, level, p0, p1, |qa, qb| {
-                checks += 1;
-                self.verifier(h, qa, qb).is_hidden(qa, qb)
-            });
+            let v = self.verifier(level);
+            let r = quantize(
+                f,
+                self.id,
+                self.ground,
+                level,
+                piece.a,
+                piece.b,
+                |qa, qb| {
+                    checks += 1;
+                    v.is_hidden(qa, qb)
+                },
+            );
             stats.checks += checks;
             match r {
                 Ok(q) => {
                     let geom = f.dequantize(self.id, self.ground, &q)?;
                     stats.stored += 1;
-                    stats.certified_m += p0.distance(p1);
-                    if !first || checks > 1 || parts.len() > 1 || (p0, p1) != (a, b) {
+                    if n > 0 || checks > 1 {
                         stats.shrunk += 1;
                     }
                     return Some(Certified {
                         q,
                         geom,
-                        piece: (p0, p1),
+                        piece: (piece.a, piece.b),
                     });
                 }
                 Err(Refused::OutsideWindow) => return None,
-                Err(Refused::NotHidden) => first = false,
+                Err(Refused::NotHidden) => {}
             }
         }
         None
     }
+}
+
+/// Shortest certified piece kept as a candidate, metres.
+pub const MIN_PIECE_M: f64 = 8.0;
+
+/// A certified hidden piece of a proposal, at a height level.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Piece {
+    pub level: u8,
+    pub a: DVec2,
+    pub b: DVec2,
 }

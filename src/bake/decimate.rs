@@ -16,39 +16,32 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use glam::DVec2;
-use rstar::primitives::{GeomWithData, Rectangle};
-use rstar::{RTree, AABB};
-
+use crate::runtime::culler::BoxTree;
 use crate::runtime::frame::{CellView, VoGeom};
-use crate::runtime::occlusion::{Cover, PreparedVo};
+use crate::runtime::occlusion::PreparedVo;
 
 /// Stop when the best remaining gain is below this share of the cost already hidden.
 pub const MIN_GAIN_SHARE: f64 = 0.01;
 
-/// The occludees of a scene: boxes in the local frame, with costs, under an R-tree.
+/// The occludees of a scene: boxes in the local frame, with costs, under the runtime's box
+/// hierarchy. Occludees are named by their position in the hierarchy (each subtree a
+/// contiguous range), so the hidden sets of rule 3 come out whole subtrees at a time.
 pub struct Occludees {
+    /// Boxes and costs, by position.
     pub boxes: Vec<[f64; 6]>,
     pub cost: Vec<u64>,
-    tree: RTree<GeomWithData<Rectangle<[f64; 2]>, u32>>,
+    tree: BoxTree,
 }
 
 impl Occludees {
+    /// `boxes[i]` and `cost[i]` of object `i`.
     pub fn new(boxes: Vec<[f64; 6]>, cost: Vec<u64>) -> Occludees {
-        let items = boxes
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                GeomWithData::new(
-                    Rectangle::from_corners([b[0], b[1]], [b[3], b[4]]),
-                    i as u32,
-                )
-            })
-            .collect();
+        let tree = BoxTree::new(&boxes);
+        let by_pos = (0..tree.positions() as u32).map(|p| tree.id_at(p) as usize);
         Occludees {
-            boxes,
-            cost,
-            tree: RTree::bulk_load(items),
+            boxes: by_pos.clone().map(|i| boxes[i]).collect(),
+            cost: by_pos.map(|i| cost[i]).collect(),
+            tree,
         }
     }
 
@@ -65,51 +58,30 @@ impl Occludees {
         Occludees::new(boxes, cost)
     }
 
-    /// The occludees within `radius` of the cell centre that `vo` hides from the cell (rule 3),
-    /// ascending.
+    /// The occludees (positions) within `radius` of the cell centre (per axis) that `vo` hides
+    /// from the cell (rule 3), ascending.
     pub fn hidden(&self, view: &CellView, vo: &VoGeom, radius: f64) -> Vec<u32> {
         let p = PreparedVo::new(view, vo);
-        let (lo, hi) = umbra_box(view, vo, radius);
-        let mut out: Vec<u32> = self
-            .tree
-            .locate_in_envelope_intersecting(AABB::from_corners(lo.to_array(), hi.to_array()))
-            .map(|g| g.data)
-            .filter(|&i| p.cover(view, &self.boxes[i as usize]) == Cover::Hidden)
-            .collect();
-        out.sort_unstable();
+        let r = view.rect;
+        let (cx, cy) = (0.5 * (r[0] + r[2]), 0.5 * (r[1] + r[3]));
+        let mut out = Vec::new();
+        self.tree.hidden_positions(
+            view,
+            &p,
+            [cx - radius, cy - radius, cx + radius, cy + radius],
+            &mut out,
+        );
         out
+    }
+
+    /// The object at position `pos`.
+    pub fn object(&self, pos: u32) -> u32 {
+        self.tree.id_at(pos)
     }
 
     pub fn cost_of(&self, ids: &[u32]) -> u64 {
         ids.iter().map(|&i| self.cost[i as usize]).sum()
     }
-}
-
-/// A box around the part within `radius` of the cell centre of the cone from the centre through
-/// the VO, which holds the VO's umbra (every segment from the cell, the centre included, to a
-/// hidden point meets the VO).
-fn umbra_box(view: &CellView, vo: &VoGeom, radius: f64) -> (DVec2, DVec2) {
-    let r = view.rect;
-    let o = DVec2::new(0.5 * (r[0] + r[2]), 0.5 * (r[1] + r[3]));
-    let full = (o - DVec2::splat(radius), o + DVec2::splat(radius));
-    let (a, b) = (DVec2::from(vo.a) - o, DVec2::from(vo.b) - o);
-    let (la, lb) = (a.length(), b.length());
-    if la == 0.0 || lb == 0.0 {
-        return full;
-    }
-    let (ua, ub) = (a / la, b / lb);
-    let cos = ua.dot(ub).clamp(-1.0, 1.0);
-    let half = 0.5 * cos.acos();
-    if half > 1.2 {
-        return full;
-    }
-    // The sector of angle 2*half lies in the triangle o, o + ua R', o + ub R' with
-    // R' = radius / cos(half).
-    let rr = radius / half.cos() * 1.001;
-    let pts = [o, o + ua * rr, o + ub * rr, o + a, o + b];
-    let lo = pts.iter().fold(DVec2::INFINITY, |m, p| m.min(*p));
-    let hi = pts.iter().fold(DVec2::NEG_INFINITY, |m, p| m.max(*p));
-    (lo.max(full.0), hi.min(full.1))
 }
 
 /// Sum of the costs of `ids` not in `covered` (both ascending).

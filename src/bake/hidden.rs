@@ -36,7 +36,7 @@ impl Default for MapParams {
             edge_eyes: 7,
             bins: 1024,
             px: 4.0,
-            half: 512.0,
+            half: 1024.0,
         }
     }
 }
@@ -111,6 +111,26 @@ impl HiddenMap {
         self.visible[k >> 6] & (1 << (k & 63)) == 0
     }
 
+    /// Whether the pixel at raster position `q` (in pixels from `lo`) counts as hidden.
+    #[inline]
+    pub fn hidden_at(&self, q: DVec2) -> bool {
+        if !(q.x >= 0.0 && q.y >= 0.0) {
+            return false;
+        }
+        let (ix, iy) = (q.x as usize, q.y as usize);
+        if ix >= self.n || iy >= self.n {
+            return false;
+        }
+        let k = iy * self.n + ix;
+        self.visible[k >> 6] & (1 << (k & 63)) == 0
+    }
+
+    /// Raster position (in pixels from `lo`) of the local point `p`.
+    #[inline]
+    pub fn raster(&self, p: DVec2) -> DVec2 {
+        (p - self.lo) / self.px
+    }
+
     /// Whether the pixel holding `p` counts as hidden.
     #[inline]
     pub fn hidden(&self, p: DVec2) -> bool {
@@ -138,19 +158,13 @@ impl HiddenMap {
             n,
             visible: vec![0; (n * n).div_ceil(64)],
         };
-        let bins = p.bins.max(TILE) / TILE * TILE;
+        let bins = (p.bins.max(TILE) / TILE * TILE).next_power_of_two();
         let scale = bins as f64 / 4.0;
         let dirs: Vec<DVec2> = (0..bins)
             .map(|k| direction((k as f64 + 0.5) / scale))
             .collect();
-        // Edges near the cell first, so that far ones are mostly skipped.
-        let mut order: Vec<(f64, usize)> = edges
-            .iter()
-            .enumerate()
-            .map(|(i, (u, v))| (u.distance_squared(centre).min(v.distance_squared(centre)), i))
-            .collect();
-        order.sort_by(|a, b| a.0.total_cmp(&b.0));
         let far = p.half * std::f64::consts::SQRT_2 + p.px;
+        let groups = Groups::new(edges, centre);
         let mut depth = vec![far; bins];
         let mut tile = vec![far; bins / TILE];
         // Eyes on each edge, with the outward normal of that edge (corners: of both edges). A ray
@@ -163,91 +177,201 @@ impl HiddenMap {
             let prev = (a - cell[(i + 3) % 4]).perp() * -1.0;
             eyes.push((a, out, prev));
             for k in 1..=p.edge_eyes {
-                eyes.push((a + (b - a) * (k as f64 / (p.edge_eyes + 1) as f64), out, out));
+                eyes.push((
+                    a + (b - a) * (k as f64 / (p.edge_eyes + 1) as f64),
+                    out,
+                    out,
+                ));
             }
         }
+        // Bins whose central ray lies in the counter-clockwise span from pseudo-angle `pa` to
+        // `pb` (less than a half-turn), as at most two ranges.
+        let spans = |pa: f64, pb: f64| -> [(usize, usize); 2] {
+            const NONE: (usize, usize) = (1, 0);
+            let first = |a: f64| ((a * scale - 0.5).ceil().max(0.0)) as usize;
+            let last = |b: f64| {
+                let l = (b * scale - 0.5).floor();
+                (l >= 0.0).then(|| (l as usize).min(bins - 1))
+            };
+            if pa <= pb {
+                match last(pb) {
+                    Some(l) => [(first(pa), l), NONE],
+                    None => [NONE, NONE],
+                }
+            } else {
+                [(first(pa), bins - 1), last(pb).map_or(NONE, |l| (0, l))]
+            }
+        };
+        let hidden_behind = |tile: &[f64], r: [(usize, usize); 2], dmin: f64| {
+            r.iter()
+                .filter(|(a, b)| a <= b)
+                .all(|&(a, b)| (a / TILE..=b / TILE).all(|t| tile[t] <= dmin))
+        };
         for &(e, out1, out2) in &eyes {
             depth.fill(far);
             tile.fill(far);
-            for &(_, i) in &order {
-                let (u, v) = edges[i];
-                // Front-facing only: the eye strictly on the outer (right) side.
-                let side = (v - u).perp_dot(e - u);
-                if side >= 0.0 {
-                    continue;
-                }
-                let dmin = seg_distance(e, u, v);
-                if dmin >= far {
-                    continue;
-                }
-                // Seen from e, the edge runs counter-clockwise from v to u.
-                let (pa, pb) = (pseudo_angle(v - e), pseudo_angle(u - e));
-                // Bins whose central ray lies within the edge's angular span.
-                let first = |a: f64| ((a * scale - 0.5).ceil().max(0.0)) as usize;
-                let last = |b: f64| (b * scale - 0.5).floor();
-                let ranges: [(usize, usize); 2] = if pa <= pb {
-                    let l = last(pb);
-                    if l < 0.0 {
+            let outward = |x: DVec2| (x - e).dot(out1) > 0.0 || (x - e).dot(out2) > 0.0;
+            for g in &groups.groups {
+                // A whole group behind what is already in the buffer is skipped.
+                let (lo, hi) = g.bounds;
+                let inside = e.x >= lo.x - 1.0
+                    && e.x <= hi.x + 1.0
+                    && e.y >= lo.y - 1.0
+                    && e.y <= hi.y + 1.0;
+                if !inside {
+                    let dmin = (lo - e).max(e - hi).max(DVec2::ZERO).length();
+                    if dmin >= far {
                         continue;
                     }
-                    [(first(pa), (l as usize).min(bins - 1)), (1, 0)]
-                } else {
-                    let l = last(pb);
-                    let tail = if l < 0.0 {
-                        (1, 0)
-                    } else {
-                        (0, (l as usize).min(bins - 1))
-                    };
-                    [(first(pa), bins - 1), tail]
-                };
-                for (r0, r1) in ranges {
-                    if r0 > r1 {
+                    let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+                    if !corners.iter().any(|&c| outward(c)) {
                         continue;
                     }
-                    let (t0, t1) = (r0 / TILE, r1 / TILE);
-                    if (t0..=t1).all(|t| tile[t] <= dmin) {
+                    let pc = pseudo_angle((lo + hi) * 0.5 - e);
+                    let (mut dlo, mut dhi) = (0.0f64, 0.0f64);
+                    for c in corners {
+                        let mut d = pseudo_angle(c - e) - pc;
+                        if d > 2.0 {
+                            d -= 4.0;
+                        } else if d < -2.0 {
+                            d += 4.0;
+                        }
+                        dlo = dlo.min(d);
+                        dhi = dhi.max(d);
+                    }
+                    let wrap = |x: f64| x.rem_euclid(4.0);
+                    if dhi - dlo < 2.0
+                        && hidden_behind(&tile, spans(wrap(pc + dlo), wrap(pc + dhi)), dmin)
+                    {
+                        continue;
+                    }
+                }
+                for &i in &groups.ids[g.range.0..g.range.1] {
+                    let (u, v) = edges[i as usize];
+                    // Front-facing only: the eye strictly on the outer (right) side.
+                    if (v - u).perp_dot(e - u) >= 0.0 || !(outward(u) || outward(v)) {
+                        continue;
+                    }
+                    let dmin = seg_distance(e, u, v);
+                    if dmin >= far {
+                        continue;
+                    }
+                    // Seen from e, the edge runs counter-clockwise from v to u.
+                    let ranges = spans(pseudo_angle(v - e), pseudo_angle(u - e));
+                    if hidden_behind(&tile, ranges, dmin) {
                         continue;
                     }
                     let w = v - u;
                     let num = (u - e).perp_dot(w);
-                    for k in r0..=r1 {
-                        let den = dirs[k].perp_dot(w);
-                        if den == 0.0 {
+                    for (r0, r1) in ranges {
+                        if r0 > r1 {
                             continue;
                         }
-                        let t = num / den;
-                        if t >= 0.0 && t < depth[k] {
-                            depth[k] = t;
+                        for k in r0..=r1 {
+                            let den = dirs[k].perp_dot(w);
+                            if den == 0.0 {
+                                continue;
+                            }
+                            let t = num / den;
+                            if t >= 0.0 && t < depth[k] {
+                                depth[k] = t;
+                            }
                         }
-                    }
-                    for t in t0..=t1 {
-                        tile[t] = depth[t * TILE..(t + 1) * TILE]
-                            .iter()
-                            .fold(0.0f64, |m, &d| m.max(d));
+                        for t in r0 / TILE..=r1 / TILE {
+                            tile[t] = depth[t * TILE..(t + 1) * TILE]
+                                .iter()
+                                .fold(0.0f64, |m, &d| m.max(d));
+                        }
                     }
                 }
             }
-            // March every outward bin's ray up to its depth, marking the pixels it crosses.
-            let step = 0.5 * p.px;
+            // March every outward bin's ray up to its depth, marking the pixels it crosses. Rays
+            // of a coarser level (more trailing zeros) are spaced less than a pixel apart up to
+            // some distance; a finer ray starts there, or where a coarser neighbour stopped.
             let o = (e - map.lo) / p.px;
+            let dtheta = std::f64::consts::TAU / bins as f64;
             for k in 0..bins {
                 let d = dirs[k];
                 if d.dot(out1) < 0.0 && d.dot(out2) < 0.0 {
                     continue;
                 }
                 let len = depth[k].min(far);
-                let steps = (len / step) as usize;
-                let dd = d * (step / p.px);
-                let mut q = o;
-                for _ in 0..=steps {
-                    map.mark(q);
-                    q += dd;
+                let start = if k == 0 {
+                    0.0
+                } else {
+                    let tz = k.trailing_zeros();
+                    let s = 1usize << tz;
+                    let neighbours = depth[k - s].min(depth[(k + s) % bins]);
+                    (p.px / ((2 << tz) as f64 * dtheta)).min(neighbours)
+                };
+                if start < len {
+                    let first = (start / p.px) as usize;
+                    let steps = (len / p.px) as usize;
+                    let mut q = o + d * first as f64;
+                    for _ in first..=steps {
+                        map.mark(q);
+                        q += d;
+                    }
                 }
                 // The pixel holding the end point (the surface itself).
                 map.mark(o + d * (len / p.px));
             }
         }
         map
+    }
+}
+
+/// Edges in square groups (by the cell of a grid their first end lies in), groups ordered by
+/// distance from the cell centre, with their bounds.
+struct Groups {
+    groups: Vec<Group>,
+    ids: Vec<u32>,
+}
+
+struct Group {
+    bounds: (DVec2, DVec2),
+    range: (usize, usize),
+}
+
+impl Groups {
+    const SIZE_M: f64 = 32.0;
+
+    fn new(edges: &[(DVec2, DVec2)], centre: DVec2) -> Groups {
+        let key = |p: DVec2| {
+            let k = ((p - centre) / Self::SIZE_M).floor();
+            (k.x as i64, k.y as i64)
+        };
+        let mut keyed: Vec<((i64, i64), u32)> = edges
+            .iter()
+            .enumerate()
+            .map(|(i, e)| (key(e.0), i as u32))
+            .collect();
+        keyed.sort_unstable();
+        let mut groups: Vec<Group> = Vec::new();
+        let mut ids: Vec<u32> = Vec::with_capacity(keyed.len());
+        let mut i = 0;
+        while i < keyed.len() {
+            let k = keyed[i].0;
+            let start = ids.len();
+            let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+            while i < keyed.len() && keyed[i].0 == k {
+                let (u, v) = edges[keyed[i].1 as usize];
+                lo = lo.min(u).min(v);
+                hi = hi.max(u).max(v);
+                ids.push(keyed[i].1);
+                i += 1;
+            }
+            groups.push(Group {
+                bounds: (lo, hi),
+                range: (start, ids.len()),
+            });
+        }
+        groups.sort_by(|a, b| {
+            let da = ((a.bounds.0 + a.bounds.1) * 0.5).distance_squared(centre);
+            let db = ((b.bounds.0 + b.bounds.1) * 0.5).distance_squared(centre);
+            da.total_cmp(&db)
+        });
+        Groups { groups, ids }
     }
 }
 

@@ -21,6 +21,7 @@ pub mod propose;
 pub mod quantize;
 pub mod scan;
 pub mod seed;
+pub mod select;
 pub mod slice;
 pub mod spine;
 pub mod svg;

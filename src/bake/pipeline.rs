@@ -79,6 +79,8 @@ pub struct BakeParams {
     pub scan: bool,
     /// Which generator proposes the VOs.
     pub generator: Generator,
+    /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres.
+    pub weigh_m: f64,
     /// The long generator's sampled visibility and line scan.
     pub map: super::hidden::MapParams,
     pub propose: super::propose::ProposeParams,
@@ -109,6 +111,7 @@ impl Default for BakeParams {
             spines: 0,
             scan: false,
             generator: Generator::Long,
+            weigh_m: 1500.0,
             map: super::hidden::MapParams::default(),
             propose: super::propose::ProposeParams::default(),
         }
@@ -287,7 +290,7 @@ impl<'s> Plan<'s> {
     /// How far from a cell's centre its bake reads the scene (metres, per axis): the growth's
     /// search distance past the cell, and the occludees weighed within this distance.
     pub fn reach(&self) -> f64 {
-        self.params.grow.search_m + self.frame.grid.cell_size
+        (self.params.grow.search_m + self.frame.grid.cell_size).max(self.params.weigh_m)
     }
 
     /// The cells to bake, ascending: those meeting the region and the walkable area, when
@@ -624,26 +627,73 @@ impl<'s> Plan<'s> {
             frame: f,
             id,
             ground,
-            cell: *cell,
+            cell,
             heights: (e0, e1, g),
             blockers: near
                 .iter()
                 .zip(support)
                 .map(|(&i, s)| (self.set.polys[i as usize].as_slice(), *s))
                 .collect(),
+            verifiers: Default::default(),
         };
         let mut cs = super::certify::CertifyStats::default();
-        let vos = greedy(&hidden, &self.occludees.cost, self.params.max_vos, |i| {
-            let (k, a, b) = cands[i];
-            let c = certifier.certify(k, a, b, &mut cs)?;
-            let before = crate::runtime::frame::VoGeom {
-                a: c.piece.0.to_array(),
-                b: c.piece.1.to_array(),
-                g,
-                h: f.vo_top(e1, k),
-            };
-            Some(((c.q, before), self.occludees.hidden(&view, &c.geom, radius)))
-        });
+        use super::certify::Piece;
+        use super::select::{select, Candidate, Stage};
+        #[derive(Clone, Copy)]
+        enum Vo {
+            Piece(Piece),
+            Stored(QVo, crate::runtime::frame::VoGeom),
+        }
+        let geom = |level: u8, a: DVec2, b: DVec2| crate::runtime::frame::VoGeom {
+            a: a.to_array(),
+            b: b.to_array(),
+            g,
+            h: f.vo_top(e1, level),
+        };
+        let start: Vec<Candidate<Vo>> = cands
+            .iter()
+            .zip(hidden)
+            .map(|(&(level, a, b), hidden)| Candidate {
+                stage: Stage::Proposed,
+                value: Vo::Piece(Piece { level, a, b }),
+                hidden,
+            })
+            .collect();
+        let picked = select(
+            start,
+            &self.occludees.cost,
+            self.params.max_vos,
+            |c| match c.value {
+                Vo::Piece(p) if c.stage == Stage::Proposed => certifier
+                    .pieces(p.level, p.a, p.b, &mut cs)
+                    .into_iter()
+                    .map(|p| Candidate {
+                        stage: Stage::Certified,
+                        value: Vo::Piece(p),
+                        hidden: self
+                            .occludees
+                            .hidden(&view, &geom(p.level, p.a, p.b), radius),
+                    })
+                    .collect(),
+                Vo::Piece(p) => certifier
+                    .store(&p, &mut cs)
+                    .map(|s| Candidate {
+                        stage: Stage::Stored,
+                        value: Vo::Stored(s.q, geom(p.level, p.a, p.b)),
+                        hidden: self.occludees.hidden(&view, &s.geom, radius),
+                    })
+                    .into_iter()
+                    .collect(),
+                Vo::Stored(..) => Vec::new(),
+            },
+        );
+        let vos: Vec<(QVo, crate::runtime::frame::VoGeom)> = picked
+            .into_iter()
+            .filter_map(|v| match v {
+                Vo::Stored(q, g) => Some((q, g)),
+                Vo::Piece(_) => None,
+            })
+            .collect();
         stats.stage_ms[3] += clock(&mut t);
         stats.tried = cs.tried;
         stats.shrunk = cs.shrunk;

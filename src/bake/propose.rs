@@ -25,26 +25,34 @@ fn snap(p: DVec2) -> DVec2 {
 /// Which lines are scanned and which runs are kept.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProposeParams {
-    /// Line normals, evenly spread over the full turn.
+    /// Line normals of the coarse scan, evenly spread over the full turn.
     pub directions: usize,
-    /// Spacing of parallel lines, metres.
+    /// Spacing of parallel lines in the coarse scan, metres.
     pub spacing: f64,
+    /// Sampling step along a line in the coarse scan, in pixels of the map.
+    pub coarse_step: usize,
     /// Farthest line from the cell centre, metres.
     pub max_offset: f64,
     /// Shortest run kept, metres.
     pub min_len: f64,
-    /// Runs kept per direction, widest umbra first.
+    /// Runs kept per direction of the coarse scan (widest umbra first), each then refined.
     pub per_direction: usize,
+    /// Refinement: first turn and shift tried, degrees and metres (halved twice).
+    pub turn_deg: f64,
+    pub shift_m: f64,
 }
 
 impl Default for ProposeParams {
     fn default() -> Self {
         ProposeParams {
-            directions: 64,
-            spacing: 4.0,
-            max_offset: 400.0,
+            directions: 32,
+            spacing: 16.0,
+            coarse_step: 2,
+            max_offset: 900.0,
             min_len: 60.0,
-            per_direction: 3,
+            per_direction: 2,
+            turn_deg: 4.0,
+            shift_m: 8.0,
         }
     }
 }
@@ -77,50 +85,182 @@ pub fn spread(cell: &[DVec2; 4], a: DVec2, b: DVec2) -> f64 {
     db.perp_dot(da).atan2(db.dot(da))
 }
 
-/// The candidate runs of `map` around `cell`.
+/// A line of the scan: unit normal `n` (away from the cell centre `c`), offset `o`.
+#[derive(Clone, Copy, Debug)]
+struct Line {
+    phi: f64,
+    o: f64,
+}
+
+impl Line {
+    fn normal(&self) -> DVec2 {
+        DVec2::new(self.phi.cos(), self.phi.sin())
+    }
+}
+
+/// The scan of one map around one cell.
+struct Scan<'a> {
+    cell: &'a [DVec2; 4],
+    map: &'a HiddenMap,
+    centre: DVec2,
+    half_w: f64,
+    /// Half the chord of the map's circumcircle at offset 0.
+    reach: f64,
+}
+
+impl Scan<'_> {
+    /// Whether the line clears the cell (its umbra is empty otherwise).
+    fn clear(&self, l: &Line) -> bool {
+        let n = l.normal();
+        l.o > self.half_w * (n.x.abs() + n.y.abs())
+    }
+
+    /// The maximal hidden runs of `l`, sampled every `step` pixels, as parameters `(t0, t1)`
+    /// along `n.perp()` from the foot of the line, shortened by a sample at each end.
+    fn runs(&self, l: &Line, step: usize, min_len: f64, out: &mut Vec<(f64, f64)>) {
+        let n = l.normal();
+        let along = n.perp();
+        let foot = self.centre + n * l.o;
+        let chord = (self.reach * self.reach - l.o * l.o).max(0.0).sqrt();
+        let h = self.map.px * step as f64;
+        let m = (chord / h) as i64;
+        let mut start: Option<i64> = None;
+        let d = along * (h / self.map.px);
+        let mut q = self.map.raster(foot) - d * m as f64;
+        for i in -m..=m + 1 {
+            let hid = i <= m && self.map.hidden_at(q);
+            q += d;
+            match (hid, start) {
+                (true, None) => start = Some(i),
+                (false, Some(s)) => {
+                    start = None;
+                    let (t0, t1) = ((s + 1) as f64 * h, (i - 2) as f64 * h);
+                    if t1 - t0 >= min_len {
+                        out.push((t0, t1));
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// The run of `l` through the point of it nearest `m`, at full resolution, if `m`'s pixel
+    /// is hidden: its parameters along `n.perp()` from the foot.
+    fn run_through(&self, l: &Line, m: DVec2) -> Option<(f64, f64)> {
+        let n = l.normal();
+        let along = n.perp();
+        let foot = self.centre + n * l.o;
+        let h = self.map.px;
+        let t = (m - foot).dot(along);
+        let q0 = self.map.raster(foot + along * t);
+        let d = along;
+        if !self.map.hidden_at(q0) {
+            return None;
+        }
+        let limit = (2.0 * self.reach / h) as i64;
+        let mut hi = 0;
+        let mut q = q0 + d;
+        while hi < limit && self.map.hidden_at(q) {
+            hi += 1;
+            q += d;
+        }
+        let mut lo = 0;
+        let mut q = q0 - d;
+        while lo > -limit && self.map.hidden_at(q) {
+            lo -= 1;
+            q -= d;
+        }
+        Some((t + (lo + 1) as f64 * h, t + (hi - 1) as f64 * h))
+    }
+
+    fn proposal(&self, l: &Line, (t0, t1): (f64, f64)) -> Proposal {
+        let n = l.normal();
+        let along = n.perp();
+        let foot = self.centre + n * l.o;
+        let (b, a) = (snap(foot + along * t0), snap(foot + along * t1));
+        Proposal {
+            a,
+            b,
+            spread: spread(self.cell, a, b),
+        }
+    }
+}
+
+/// The candidate runs of `map` around `cell`: a coarse scan of lines at every direction and
+/// offset, the runs of widest umbra per direction, each refined by turning and shifting its line
+/// about its middle while the umbra widens.
 pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Proposal> {
     let centre = (cell[0] + cell[2]) * 0.5;
-    let half_w = 0.5 * (cell[2].x - cell[0].x).abs().max((cell[2].y - cell[0].y).abs());
-    let reach = 0.5 * map.n as f64 * map.px * std::f64::consts::SQRT_2;
-    let step = map.px;
-    let mut out = Vec::new();
+    let half_w = 0.5
+        * (cell[2].x - cell[0].x)
+            .abs()
+            .max((cell[2].y - cell[0].y).abs());
+    let scan = Scan {
+        cell,
+        map,
+        centre,
+        half_w,
+        reach: 0.5 * map.n as f64 * map.px * std::f64::consts::SQRT_2,
+    };
+    let mut out: Vec<Proposal> = Vec::new();
+    let mut found = Vec::new();
     for j in 0..p.directions {
         let phi = std::f64::consts::TAU * j as f64 / p.directions as f64;
-        let n = DVec2::new(phi.cos(), phi.sin());
-        // Counter-clockwise along the line, seen from the cell: from b's side to a's.
-        let along = n.perp();
-        let clear = half_w * (n.x.abs() + n.y.abs()) + p.spacing;
-        let mut best: Vec<Proposal> = Vec::new();
-        let mut o = clear;
+        let mut best: Vec<(Line, Proposal)> = Vec::new();
+        let mut o = half_w * (phi.cos().abs() + phi.sin().abs()) + p.spacing;
         while o <= p.max_offset {
-            let foot = centre + n * o;
-            // Only the chord of the line inside the raster's circumcircle.
-            let chord = (reach * reach - o * o).max(0.0).sqrt();
-            let m = (chord / step) as i64;
-            let mut start: Option<i64> = None;
-            for i in -m..=m + 1 {
-                let h = i <= m && map.hidden(foot + along * (i as f64 * step));
-                match (h, start) {
-                    (true, None) => start = Some(i),
-                    (false, Some(s)) => {
-                        start = None;
-                        // Shortened by a sample at each end: off the boundary pixels.
-                        let (t0, t1) = ((s + 1) as f64 * step, (i - 2) as f64 * step);
-                        if t1 - t0 >= p.min_len {
-                            let (b, a) = (snap(foot + along * t0), snap(foot + along * t1));
-                            let s = spread(cell, a, b);
-                            best.push(Proposal { a, b, spread: s });
-                        }
-                    }
-                    _ => {}
-                }
-            }
+            let l = Line { phi, o };
+            found.clear();
+            scan.runs(&l, p.coarse_step, p.min_len, &mut found);
+            best.extend(found.iter().map(|&r| (l, scan.proposal(&l, r))));
             o += p.spacing;
         }
-        best.sort_by(|x, y| y.spread.total_cmp(&x.spread));
-        out.extend(best.into_iter().take(p.per_direction));
+        best.sort_by(|x, y| y.1.spread.total_cmp(&x.1.spread));
+        for (l, seed) in best.into_iter().take(p.per_direction) {
+            out.push(refine(&scan, l, seed, p));
+        }
     }
     out
+}
+
+/// Local search about the middle of `seed` (on line `l`): turn by +-turn and shift by +-shift,
+/// moving while the umbra widens, then halve both, three times over.
+fn refine(scan: &Scan, mut l: Line, mut seed: Proposal, p: &ProposeParams) -> Proposal {
+    let (mut turn, mut shift) = (p.turn_deg.to_radians(), p.shift_m);
+    for _ in 0..3 {
+        for _ in 0..4 {
+            let m = (seed.a + seed.b) * 0.5;
+            let mut moved = false;
+            for (dphi, dso) in [(turn, 0.0), (-turn, 0.0), (0.0, shift), (0.0, -shift)] {
+                // Turning about the middle: the offset that keeps the line through m.
+                let phi = l.phi + dphi;
+                let n = DVec2::new(phi.cos(), phi.sin());
+                let cand = Line {
+                    phi,
+                    o: (m - scan.centre).dot(n) + dso,
+                };
+                if !scan.clear(&cand) {
+                    continue;
+                }
+                let Some(r) = scan.run_through(&cand, m + n * dso) else {
+                    continue;
+                };
+                if r.1 - r.0 < p.min_len {
+                    continue;
+                }
+                let q = scan.proposal(&cand, r);
+                if q.spread > seed.spread {
+                    (l, seed, moved) = (cand, q, true);
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        turn *= 0.5;
+        shift *= 0.5;
+    }
+    seed
 }
 
 #[cfg(test)]

@@ -122,7 +122,7 @@ impl Default for GrowParams {
     fn default() -> Self {
         GrowParams {
             seeds: 8,
-            search_m: 400.0,
+            search_m: 900.0,
             max_chain: 24,
             max_bridges: 2,
             tries: 6,

@@ -286,7 +286,13 @@ pub fn segment_meets_convex(a: DVec2, b: DVec2, poly: &[DVec2]) -> bool {
 /// Among vertices in the same direction, the nearest to `q` is returned; so a segment seen
 /// edge-on (from a point of its line beyond an end) gives its nearer end twice.
 pub fn tangent_vertices(q: DVec2, poly: &[DVec2]) -> Option<(usize, usize)> {
-    if point_in_convex(poly, q) != Containment::Outside {
+    // A point strictly outside the bounding box is outside (comparisons of input coordinates
+    // are exact); otherwise the exact test decides.
+    let outside_box = poly.iter().all(|v| v.x < q.x)
+        || poly.iter().all(|v| v.x > q.x)
+        || poly.iter().all(|v| v.y < q.y)
+        || poly.iter().all(|v| v.y > q.y);
+    if !outside_box && point_in_convex(poly, q) != Containment::Outside {
         return None;
     }
     let closer =

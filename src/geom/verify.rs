@@ -71,8 +71,8 @@
 use glam::DVec2;
 
 use super::predicates::{
-    common_tangents, orient, point_in_convex, set_side,
-    tangent_vertices, Containment, Orientation, SetSide,
+    common_tangents, orient, point_in_convex, set_side, tangent_vertices, Containment, Orientation,
+    SetSide,
 };
 
 /// Least step of the sweep past a point it cannot certify, metres.
@@ -81,11 +81,12 @@ pub const MIN_PIECE_M: f64 = 0.01;
 pub const PARAM_BITS: u32 = 30;
 /// The sweep's first probe ahead of its current point, metres (halved down to [`MIN_PIECE_M`]
 /// when no certificate holds that far).
-pub const PROBE_M: f64 = 1.0;
+pub const PROBE_M: f64 = 0.01;
 
 const END: u64 = 1 << PARAM_BITS;
 /// Debug counters.
-pub static STATS: [std::sync::atomic::AtomicU64; 4] = [const { std::sync::atomic::AtomicU64::new(0) }; 4];
+pub static STATS: [std::sync::atomic::AtomicU64; 4] =
+    [const { std::sync::atomic::AtomicU64::new(0) }; 4];
 
 /// A hidden sub-interval of the verified segment: parameters along `a -> b` and the exact
 /// endpoints (each lies exactly on the segment).
@@ -188,6 +189,17 @@ fn conditions(links: &[Link], cell: &[DVec2]) -> Vec<Cond> {
     c
 }
 
+/// The blockers near one stretch of the swept segment, `span` in parameters.
+struct NearCache {
+    span: (u64, u64),
+    /// How far past a requested piece a new stretch reaches, in parameter steps.
+    ahead: u64,
+    ids: Vec<u32>,
+}
+
+/// How far ahead of the sweep the blockers near the segment are gathered at once, metres.
+pub const NEAR_AHEAD_M: f64 = 24.0;
+
 /// A uniform grid of buckets over the blockers' boxes (bucket `k` holds
 /// `ids[start[k]..start[k + 1]]`; a box is listed in every bucket it meets).
 struct Grid {
@@ -269,7 +281,7 @@ impl Grid {
     }
 
     /// Ids of the boxes listed in the buckets meeting `[lo, hi]`, ascending, each once.
-    fn query(&self, lo: DVec2, hi: DVec2) -> Vec<u32> {
+    fn query(&self, lo: DVec2, hi: DVec2, keep: &dyn Fn(DVec2, DVec2) -> bool) -> Vec<u32> {
         if self.nx == 0 {
             return Vec::new();
         }
@@ -277,8 +289,14 @@ impl Grid {
         let mut out = Vec::new();
         for y in y0..=y1 {
             for x in x0..=x1 {
+                let b0 = self.lo + DVec2::new(x as f64, y as f64) * self.size;
+                if !keep(b0, b0 + DVec2::splat(self.size)) {
+                    continue;
+                }
                 let k = y * self.nx + x;
-                out.extend_from_slice(&self.ids[self.start[k] as usize..self.start[k + 1] as usize]);
+                out.extend_from_slice(
+                    &self.ids[self.start[k] as usize..self.start[k + 1] as usize],
+                );
             }
         }
         out.sort_unstable();
@@ -293,6 +311,93 @@ pub struct Verifier<'a> {
     blockers: Vec<&'a [DVec2]>,
     boxes: Vec<(DVec2, DVec2)>,
     grid: Grid,
+    /// Certificates found so far, tried first where they were found (module header).
+    cache: std::cell::RefCell<CertCache>,
+}
+
+/// Certificates (their conditions) by where they held: each is listed in the buckets of the
+/// bounding box of the piece it certified, grown by [`CACHE_REACH_M`].
+#[derive(Default)]
+struct CertCache {
+    certs: Vec<Vec<Cond>>,
+    buckets: std::collections::HashMap<(i64, i64), Vec<u32>>,
+}
+
+/// A new certificate is first sought among this many blockers nearest the point.
+pub const NEAREST_FIRST: usize = 12;
+/// Cached certificates tried per point, newest first.
+pub const CACHE_TRIES: usize = 16;
+/// A cached certificate reaching less far than this is not enough: a new one is sought too,
+/// metres.
+pub const CACHE_ENOUGH_M: f64 = 2.0;
+
+/// How far along `[q, b]` (as a share of it) every condition of a certificate stays true,
+/// estimated in floating point from their affine values at both ends.
+fn reach(conds: &[Cond], q: DVec2, b: DVec2) -> f64 {
+    let mut t = 1.0f64;
+    for c in conds {
+        let (f0, f1) = (c.value(q), c.value(b));
+        // A strict condition fails where f reaches 0, a non-strict one where it goes below
+        // (one that is 0 all along, as a join through a shared vertex, never fails).
+        let fails = if c.strict { f1 <= 0.0 } else { f1 < 0.0 };
+        if fails {
+            t = if f0 > 0.0 { t.min(f0 / (f0 - f1)) } else { 0.0 };
+        }
+    }
+    t
+}
+
+/// Side of a bucket of the certificate cache, metres.
+pub const CACHE_BUCKET_M: f64 = 8.0;
+/// A cached certificate is tried within this distance of the piece it certified, metres.
+pub const CACHE_REACH_M: f64 = 4.0;
+
+impl CertCache {
+    fn key(p: DVec2) -> (i64, i64) {
+        (
+            (p.x / CACHE_BUCKET_M).floor() as i64,
+            (p.y / CACHE_BUCKET_M).floor() as i64,
+        )
+    }
+
+    fn add(&mut self, conds: Vec<Cond>, p0: DVec2, p1: DVec2) {
+        let id = self.certs.len() as u32;
+        self.certs.push(conds);
+        let r = DVec2::splat(CACHE_REACH_M);
+        let (lo, hi) = (Self::key(p0.min(p1) - r), Self::key(p0.max(p1) + r));
+        // Long pieces are listed along their length only (at most 64 buckets).
+        let n = ((hi.0 - lo.0 + 1) * (hi.1 - lo.1 + 1)) as usize;
+        if n <= 64 {
+            for x in lo.0..=hi.0 {
+                for y in lo.1..=hi.1 {
+                    self.buckets.entry((x, y)).or_default().push(id);
+                }
+            }
+        } else {
+            let steps = (p0.distance(p1) / CACHE_BUCKET_M).ceil().max(1.0) as usize;
+            for k in 0..=steps.min(64) {
+                let q = p0 + (p1 - p0) * (k as f64 / steps.min(64) as f64);
+                let v = self.buckets.entry(Self::key(q)).or_default();
+                if v.last() != Some(&id) {
+                    v.push(id);
+                }
+            }
+        }
+    }
+
+    /// The cached certificates that hold at every point of `pts` (newest first), if any.
+    /// Of the newest [`CACHE_TRIES`] certificates listed where `q` is, one that holds at `q`
+    /// and `p` and reaches furthest towards `b` ([`reach`]), with that reach.
+    fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(&[Cond], f64)> {
+        let ids = self.buckets.get(&Self::key(q))?;
+        ids.iter()
+            .rev()
+            .take(CACHE_TRIES)
+            .map(|&i| self.certs[i as usize].as_slice())
+            .filter(|c| [q, p].iter().all(|&x| c.iter().all(|k| k.holds(x))))
+            .map(|c| (c, reach(c, q, b)))
+            .max_by(|x, y| x.1.total_cmp(&y.1))
+    }
 }
 
 /// Parameters `j / 2^PARAM_BITS` along one segment, turned into exact points of it.
@@ -323,7 +428,10 @@ impl Param {
             let err = (a - (s - bb)) + (u - bb);
             (err == 0.0 && s.is_finite()).then_some(s)
         };
-        Some(DVec2::new(exact(self.a.x, self.d.x)?, exact(self.a.y, self.d.y)?))
+        Some(DVec2::new(
+            exact(self.a.x, self.d.x)?,
+            exact(self.a.y, self.d.y)?,
+        ))
     }
 
     /// The exact point at `j` or, failing that, at the nearest coarser parameter in `(lo, j]`
@@ -357,6 +465,7 @@ impl<'a> Verifier<'a> {
             blockers,
             boxes,
             grid,
+            cache: Default::default(),
         }
     }
 
@@ -364,31 +473,52 @@ impl<'a> Verifier<'a> {
     /// convex hull of the cell and the segment (a float filter that drops only blockers clear of
     /// it by a margin; every segment from the cell to `[a, b]` lies in the hull, and leaving a
     /// blocker out can only certify less).
-    fn near(&self, a: DVec2, b: DVec2) -> Vec<&'a [DVec2]> {
+    fn near(&self, a: DVec2, b: DVec2) -> Vec<u32> {
         let hull = convex_hull(self.cell.iter().copied().chain([a, b]));
         let (lo, hi) = bbox(&hull);
-        let edges: Vec<(DVec2, DVec2)> = (0..hull.len())
-            .map(|i| (hull[i], hull[(i + 1) % hull.len()]))
-            .collect();
-        self.grid
-            .query(lo, hi)
-            .into_iter()
-            .filter(|&i| {
-                let (bl, bh) = self.boxes[i as usize];
-                if bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y {
-                    return false;
-                }
-                let poly = self.blockers[i as usize];
-                // Clear of the hull: every vertex right of one hull edge by a margin.
-                hull.len() < 3
-                    || !edges.iter().any(|&(u, v)| {
-                        let w = v - u;
-                        let m = 1e-9 * (w.length() + 1.0) * (1.0 + u.abs().max_element());
-                        poly.iter().all(|&p| w.perp_dot(p - u) < -m)
-                    })
+        // Each hull edge as an outward half-plane `n . x > c + m`: a box wholly beyond one,
+        // by the margin, holds no point of the hull (rounding of this float test only keeps
+        // a blocker more, or drops one that at most touches the hull).
+        let planes: Vec<(DVec2, f64)> = if hull.len() < 3 {
+            Vec::new()
+        } else {
+            (0..hull.len())
+                .map(|i| {
+                    let (u, v) = (hull[i], hull[(i + 1) % hull.len()]);
+                    let n = (v - u).perp() * -1.0;
+                    let m = 1e-9 * (n.length() + 1.0) * (1.0 + u.abs().max_element());
+                    (n, n.dot(u) + m)
+                })
+                .collect()
+        };
+        let clear = |bl: DVec2, bh: DVec2| {
+            planes.iter().any(|&(n, c)| {
+                let x = if n.x >= 0.0 { bl.x } else { bh.x };
+                let y = if n.y >= 0.0 { bl.y } else { bh.y };
+                n.x * x + n.y * y > c
             })
-            .map(|i| self.blockers[i as usize])
-            .collect()
+        };
+        let mut out = self.grid.query(lo, hi, &|bl, bh| !clear(bl, bh));
+        out.retain(|&i| {
+            let (bl, bh) = self.boxes[i as usize];
+            !(bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y || clear(bl, bh))
+        });
+        out
+    }
+
+    /// [`Self::near`] of the piece `[j, k]`, from the cache when it covers the piece; otherwise
+    /// computed for the piece and [`NEAR_AHEAD_M`] beyond, and cached.
+    fn near_cached<'c>(&self, par: &Param, j: u64, k: u64, cache: &'c mut NearCache) -> &'c [u32] {
+        if !(cache.span.0 <= j && k <= cache.span.1) {
+            let end = k.max(j.saturating_add(cache.ahead)).min(END);
+            let (e, pe) = par
+                .at_or_below(end, k)
+                .unwrap_or((k, par.at(k).unwrap_or(par.b)));
+            let q = par.at(j).unwrap_or(par.a);
+            cache.ids = self.near(q, pe);
+            cache.span = (j, e.max(k));
+        }
+        &cache.ids
     }
 
     /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
@@ -414,9 +544,14 @@ impl<'a> Verifier<'a> {
         let (min_step, probe) = (steps(MIN_PIECE_M), steps(PROBE_M));
         let mut j = 0u64;
         let mut gap = min_step;
+        let mut cache = NearCache {
+            span: (1, 0),
+            ahead: steps(NEAR_AHEAD_M),
+            ids: Vec::new(),
+        };
         while j < END {
             let Some(q) = par.at(j) else { break };
-            match self.piece_from(&par, j, q, probe, min_step) {
+            match self.piece_from(&par, (j, q), probe, &mut cache) {
                 Some((e, pe)) => {
                     match out.last_mut() {
                         Some(h) if h.p1 == q => {
@@ -453,57 +588,126 @@ impl<'a> Verifier<'a> {
     fn piece_from(
         &self,
         par: &Param,
-        j: u64,
-        q: DVec2,
+        (j, q): (u64, DVec2),
         probe: u64,
-        min_step: u64,
+        cache: &mut NearCache,
     ) -> Option<(u64, DVec2)> {
-        let mut s = probe;
-        loop {
-            let (k, p) = par.at_or_below((j + s).min(END), j)?;
-            if let Some(e) = self.extend(par, j, q, k, p) {
-                return Some(e);
-            }
-            if s <= min_step {
-                return None;
-            }
-            s /= 2;
-        }
+        let (k, p) = par.at_or_below((j + probe).min(END), j)?;
+        self.extend(par, (j, q), (k, p), cache)
     }
 
     /// Given the piece `[q, p]` (parameters `j < k`), a certificate for it, extended as far
     /// along the segment as it holds: the end parameter and point.
-    fn extend(&self, par: &Param, j: u64, q: DVec2, k: u64, p: DVec2) -> Option<(u64, DVec2)> {
-        let near = self.near(q, p);
-        STATS[0].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        STATS[1].fetch_add(near.len() as u64, std::sync::atomic::Ordering::Relaxed);
-        // Inside one blocker: the piece up to where the segment leaves it.
-        let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
-        if let Some(&blk) = near.iter().find(|b| inside(b, q) && inside(b, p)) {
-            let exit = exit_param(blk, par, j);
-            return Some(self.furthest(par, k, p, exit, &|x| inside(blk, x)));
-        }
-        let anchor = exact_midpoint(q, p).unwrap_or(q);
-        let pts = [anchor, q, p];
-        let links = self.chain(&near, &pts)?;
-        STATS[2].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        STATS[3].fetch_add(links.len() as u64, std::sync::atomic::Ordering::Relaxed);
-        let conds = conditions(&links, self.cell);
-        if !pts.iter().all(|&x| conds.iter().all(|c| c.holds(x))) {
-            return None;
-        }
-        // Where the first condition stops holding, estimated from its affine values at q and b.
-        let mut t = 1.0f64;
-        for c in &conds {
-            let (f0, f1) = (c.value(q), c.value(par.b));
-            if f1 < 0.0 && f0 > 0.0 {
-                t = t.min(f0 / (f0 - f1));
-            } else if f1 <= 0.0 && f0 <= 0.0 {
-                t = 0.0;
+    fn extend(
+        &self,
+        par: &Param,
+        (j, q): (u64, DVec2),
+        (k, p): (u64, DVec2),
+        cache: &mut NearCache,
+    ) -> Option<(u64, DVec2)> {
+        // A certificate found before that holds here (it proves the piece as well as a new one).
+        let remaining = q.distance(par.b);
+        let cached = self
+            .cache
+            .borrow()
+            .find(q, p, par.b)
+            .map(|(c, t)| (c.to_vec(), t));
+        // A cached certificate that reaches only a little way: a new one may reach further.
+        let cached = cached.filter(|(_, t)| t * remaining >= CACHE_ENOUGH_M);
+        let (conds, fresh) = match cached {
+            Some((c, _)) => (c, false),
+            None => {
+                let ids = self.near_cached(par, j, k, cache);
+                STATS[0].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                STATS[1].fetch_add(ids.len() as u64, std::sync::atomic::Ordering::Relaxed);
+                // Inside one blocker: the piece up to where the segment leaves it.
+                let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
+                let in_box = |i: u32, x: DVec2| {
+                    let (lo, hi) = self.boxes[i as usize];
+                    lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y
+                };
+                if let Some(&i) = ids.iter().find(|&&i| {
+                    in_box(i, q) && in_box(i, p) && {
+                        let b = self.blockers[i as usize];
+                        inside(b, q) && inside(b, p)
+                    }
+                }) {
+                    let blk = self.blockers[i as usize];
+                    if blk.len() < 3 {
+                        let exit = exit_param(blk, par, j);
+                        return Some(self.furthest(par, k, p, exit, &|x| inside(blk, x)));
+                    }
+                    // A polygon is a certificate by itself: on no edge's outer side.
+                    let n = blk.len();
+                    let conds = (0..n)
+                        .map(|e| Cond {
+                            u: blk[e],
+                            v: blk[(e + 1) % n],
+                            strict: false,
+                        })
+                        .collect();
+                    (conds, true)
+                } else {
+                    let anchor = exact_midpoint(q, p).unwrap_or(q);
+                    let pts = [anchor, q, p];
+                    let valid = |links: &[Link]| {
+                        let conds = conditions(links, self.cell);
+                        pts.iter()
+                            .all(|&x| conds.iter().all(|c| c.holds(x)))
+                            .then_some(conds)
+                    };
+                    // Chords read at the anchor first; near an umbra boundary, from all three
+                    // points.
+                    let search = |near: &[&[DVec2]]| -> Option<Vec<Cond>> {
+                        let first = self.chain(near, &pts, false)?;
+                        match valid(&first) {
+                            Some(c) => Some(c),
+                            None => valid(&self.chain(near, &pts, true)?),
+                        }
+                    };
+                    // The blockers nearest the point first: they subtend the widest angles, and
+                    // a few of them usually cover the cell; then all of them.
+                    let dist = |i: u32| {
+                        let (lo, hi) = self.boxes[i as usize];
+                        (lo - q).max(q - hi).max(DVec2::ZERO).length_squared()
+                    };
+                    let mut order: Vec<(f64, u32)> = ids.iter().map(|&i| (dist(i), i)).collect();
+                    let few = NEAREST_FIRST.min(order.len());
+                    let all: Vec<&[DVec2]>;
+                    let conds = if order.len() > few {
+                        order.select_nth_unstable_by(few, |a, b| {
+                            a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+                        });
+                        let mut nearest: Vec<u32> = order[..few].iter().map(|x| x.1).collect();
+                        nearest.sort_unstable();
+                        let near: Vec<&[DVec2]> =
+                            nearest.iter().map(|&i| self.blockers[i as usize]).collect();
+                        match search(&near) {
+                            Some(c) => c,
+                            None => {
+                                all = ids.iter().map(|&i| self.blockers[i as usize]).collect();
+                                search(&all)?
+                            }
+                        }
+                    } else {
+                        all = ids.iter().map(|&i| self.blockers[i as usize]).collect();
+                        search(&all)?
+                    };
+                    STATS[2].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    (conds, true)
+                }
             }
-        }
+        };
+        // Where the first condition stops holding, estimated from its affine values at q and b.
+        let t = reach(&conds, q, par.b);
         let est = j + ((END - j) as f64 * t) as u64;
-        Some(self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x))))
+        let end = self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x)));
+        if fresh {
+            self.cache.borrow_mut().add(conds, q, end.1);
+        } else {
+            STATS[3].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
+        Some(end)
     }
 
     /// The largest exact parameter in `[k, est]` whose point passes `ok`, by checking `est` and
@@ -545,7 +749,7 @@ impl<'a> Verifier<'a> {
     /// point of `pts`, by breadth-first search over the chords seen from `pts[0]`. Any chain
     /// that is valid with fewer blockers is still found with more, so adding a blocker never
     /// loses a certificate.
-    fn chain(&self, near: &[&[DVec2]], pts: &[DVec2; 3]) -> Option<Vec<Link>> {
+    fn chain(&self, near: &[&[DVec2]], pts: &[DVec2; 3], multi: bool) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
         let (cl, cr) = tangent_vertices(q, self.cell)?;
@@ -565,7 +769,7 @@ impl<'a> Verifier<'a> {
             // boundary, nearly collinear vertices trade places within millimetres.
             let mut ls = vec![b[l]];
             let mut rs = vec![b[r]];
-            for &p in &pts[1..] {
+            for &p in &pts[1..(if multi { 3 } else { 1 })] {
                 if let Some((l, r)) = tangent_vertices(p, b) {
                     if !ls.contains(&b[l]) {
                         ls.push(b[l]);
@@ -579,7 +783,11 @@ impl<'a> Verifier<'a> {
                 for &r in &rs {
                     if all(&|p| orient(p, l, r) == Ccw) {
                         // The separating line comes later, only for arcs the cover picks.
-                        let sep = SepLine { a: l, b: r, side: Ccw };
+                        let sep = SepLine {
+                            a: l,
+                            b: r,
+                            side: Ccw,
+                        };
                         arcs.push(Link { l, r, sep, poly });
                     }
                 }
@@ -665,7 +873,6 @@ impl<'a> Verifier<'a> {
         }
         Some(path)
     }
-
 }
 
 /// A line through two input vertices with the blocker `b` on one closed side and the cell on the

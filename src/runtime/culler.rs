@@ -201,6 +201,68 @@ impl BoxTree {
     }
 }
 
+impl BoxTree {
+    /// The object at tree position `pos` (positions run over the valid boxes, each subtree a
+    /// contiguous range).
+    pub fn id_at(&self, pos: u32) -> u32 {
+        self.ids[pos as usize]
+    }
+
+    /// Number of tree positions (the valid boxes).
+    pub fn positions(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// Appends to `out`, ascending, the tree positions of the boxes meeting the rectangle
+    /// `within = [x0, y0, x1, y1]` that `vo` hides from `view` (rule 3, [`PreparedVo::cover`]):
+    /// whole subtrees at once where their bounds are hidden (rule 3 is monotone under
+    /// inclusion), none below bounds outside the umbra.
+    pub fn hidden_positions(
+        &self,
+        view: &crate::runtime::frame::CellView,
+        vo: &PreparedVo,
+        within: [f64; 4],
+        out: &mut Vec<u32>,
+    ) {
+        let meets = |b: &[f64; 6]| {
+            b[0] <= within[2] && b[3] >= within[0] && b[1] <= within[3] && b[4] >= within[1]
+        };
+        let inside = |b: &[f64; 6]| {
+            b[0] >= within[0] && b[3] <= within[2] && b[1] >= within[1] && b[4] <= within[3]
+        };
+        let mut stack = [0u32; STACK];
+        let mut sp = usize::from(!self.nodes.is_empty());
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.nodes[stack[sp] as usize];
+            if !meets(&node.bounds) {
+                continue;
+            }
+            match vo.cover_group(view, &node.bounds, node.min_top) {
+                Cover::Outside => continue,
+                Cover::Hidden if inside(&node.bounds) => {
+                    out.extend(node.start..node.end);
+                    continue;
+                }
+                _ => {}
+            }
+            if node.left == LEAF || sp + 2 > STACK {
+                for k in node.start..node.end {
+                    let b = &self.boxes[k as usize];
+                    if meets(b) && vo.cover(view, b) == Cover::Hidden {
+                        out.push(k);
+                    }
+                }
+                continue;
+            }
+            // Left popped first: positions come out ascending.
+            stack[sp] = node.right;
+            stack[sp + 1] = node.left;
+            sp += 2;
+        }
+    }
+}
+
 /// What one query did (for tests and profiling).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PvsStats {

@@ -164,7 +164,12 @@ impl PreparedVo {
         let l2 = d[0] * d[0] + d[1] * d[1];
         let len = l2.sqrt();
         let cross = |u: [f64; 2], v: [f64; 2]| u[0] * v[1] - u[1] * v[0];
-        let ws = [[fp[0], fp[1]], [fp[2], fp[1]], [fp[2], fp[3]], [fp[0], fp[3]]];
+        let ws = [
+            [fp[0], fp[1]],
+            [fp[2], fp[1]],
+            [fp[2], fp[3]],
+            [fp[0], fp[3]],
+        ];
         // Crossings of the segments between corners of the cell and of the footprint with the
         // VO's line: their parameters along a -> b bound those of every such segment.
         let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -192,7 +197,7 @@ impl PreparedVo {
         let mut df: f64 = 0.0;
         for c in self.cs {
             for p in [p0, p1] {
-                df = df.max((c[0] - p[0]).hypot(c[1] - p[1]));
+                df = df.max(((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)).sqrt());
             }
         }
         let df = df + m;
@@ -294,14 +299,14 @@ fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    (p[0] - a[0] - t * d[0]).hypot(p[1] - a[1] - t * d[1])
+    ((p[0] - a[0] - t * d[0]).powi(2) + (p[1] - a[1] - t * d[1]).powi(2)).sqrt()
 }
 
 /// Least distance from `p` to the rectangle `[x0, y0, x1, y1]`.
 fn point_rect(p: [f64; 2], r: [f64; 4]) -> f64 {
     let dx = (r[0] - p[0]).max(p[0] - r[2]).max(0.0);
     let dy = (r[1] - p[1]).max(p[1] - r[3]).max(0.0);
-    dx.hypot(dy)
+    (dx * dx + dy * dy).sqrt()
 }
 
 /// Whether `vo` hides box `bx` from `view` (rule 3).
