@@ -16,7 +16,7 @@
 use glam::DVec2;
 
 use super::quantize::{quantize, Refused};
-use super::slice::Support;
+use super::slice::{d_near, Support};
 use crate::geom::verify::Verifier;
 use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
@@ -34,8 +34,8 @@ pub struct Certifier<'a> {
     pub heights: (f64, f64, f64),
     /// Usable blockers: polygon and rule-2 support.
     pub blockers: Vec<(&'a [DVec2], Support)>,
-    /// One verifier per height level, built when first needed.
-    pub verifiers: [std::cell::OnceCell<Verifier<'a>>; HEIGHT_LEVELS as usize],
+    /// One verifier per height level and distance band, built when first needed.
+    pub verifiers: Vec<std::cell::OnceCell<Verifier<'a>>>,
 }
 
 /// A stored VO and where it came from.
@@ -59,27 +59,57 @@ pub struct CertifyStats {
     pub shrunk: usize,
     /// Exact verifications run (hidden-part searches and quantized checks).
     pub checks: usize,
+    /// Levels a stored VO was raised by after quantization.
+    pub raised: usize,
     /// Length proposed and length certified (the longest certified piece), metres.
     pub proposed_m: f64,
     pub certified_m: f64,
 }
 
+/// Distance bands for rule 2's perspective bonus: band `k > 0` holds VOs at least
+/// `BAND0_M * 2^(k - 1)` metres from the cell, band 0 any VO.
+pub const BANDS: usize = 7;
+pub const BAND0_M: f64 = 50.0;
+
+/// The least distance of band `k` (0 for band 0).
+pub fn band_floor(k: usize) -> f64 {
+    if k == 0 {
+        0.0
+    } else {
+        BAND0_M * (1u32 << (k - 1)) as f64
+    }
+}
+
+/// The band of a VO whose least distance from the cell is `dn`.
+pub fn band_of(dn: f64) -> usize {
+    (0..BANDS).rev().find(|&k| band_floor(k) <= dn).unwrap_or(0)
+}
+
 impl<'a> Certifier<'a> {
-    /// The verifier of `level`: over the blockers that support a VO of that level's top
-    /// wherever it stands (rule 2 with the ratio at its cap of 1: `t >= h`), so that one
-    /// verifier, and the certificates it caches, serve every VO of the level.
-    fn verifier(&self, level: u8) -> &Verifier<'a> {
-        self.verifiers[level as usize].get_or_init(|| {
+    /// The verifier of a level and a distance band: over the blockers that support, by rule 2,
+    /// a VO of that level's top whose least distance from the cell is at least the band's floor
+    /// (for band 0, wherever it stands: the ratio at its cap of 1, `t >= h`). Rule 2's bound
+    /// only falls as the VO's distance grows, so these blockers support every VO of the band,
+    /// and one verifier, with the certificates it caches, serves all of them.
+    fn verifier(&self, level: u8, band: usize) -> &Verifier<'a> {
+        self.verifiers[level as usize * BANDS + band].get_or_init(|| {
             let (e0, e1, g) = self.heights;
             let h = self.frame.vo_top(e1, level);
+            let dn = band_floor(band).max(f64::MIN_POSITIVE);
             Verifier::new(
                 self.cell,
                 self.blockers
                     .iter()
-                    .filter(|(_, s)| s.supports(e0, e1, g, h, f64::MIN_POSITIVE))
+                    .filter(|(_, s)| s.supports(e0, e1, g, h, dn))
                     .map(|(p, _)| *p),
             )
         })
+    }
+
+    /// The band a segment belongs to, and the check that it does (rounding-safe: the band is
+    /// taken from its distance less a margin, then its distance is checked against the floor).
+    fn band(&self, a: DVec2, b: DVec2, margin: f64) -> usize {
+        band_of((d_near(self.cell, &[a, b]) - margin).max(0.0))
     }
 
     /// The certified hidden pieces of proposal `a`–`b` at `level` (or, when none, at up to
@@ -87,10 +117,12 @@ impl<'a> Certifier<'a> {
     pub fn pieces(&self, level: u8, a: DVec2, b: DVec2, stats: &mut CertifyStats) -> Vec<Piece> {
         stats.tried += 1;
         stats.proposed_m += a.distance(b);
+        // Pieces are no nearer the cell than the proposal.
+        let band = self.band(a, b, 0.0);
         for level in (1..=level).rev().take(LEVEL_FALLBACKS) {
             stats.checks += 1;
             let mut out: Vec<Piece> = self
-                .verifier(level)
+                .verifier(level, band)
                 .hidden_parts(a, b)
                 .into_iter()
                 .filter(|p| p.p0.distance(p.p1) >= MIN_PIECE_M)
@@ -110,12 +142,19 @@ impl<'a> Certifier<'a> {
     }
 
     /// A certified piece quantized to its stored form, re-checked from the dequantized bytes
-    /// (rule 2 for that segment, then the exact verifier); lower levels when that fails.
+    /// (rule 2 for that segment through its band, then the exact verifier); lower levels when
+    /// that fails. A stored VO is then raised level by level while the verifier of the higher
+    /// level (whose blockers support it by rule 2) still certifies its dequantized segment.
     pub fn store(&self, piece: &Piece, stats: &mut CertifyStats) -> Option<Certified> {
         let f = self.frame;
+        // Quantization moves an end by at most a grid diagonal.
+        let margin = 2.0 * f.quantum;
+        let band = self.band(piece.a, piece.b, margin);
+        let floor = band_floor(band);
+        let in_band = |qa: DVec2, qb: DVec2| d_near(self.cell, &[qa, qb]) >= floor;
         for (n, level) in (1..=piece.level).rev().take(LEVEL_FALLBACKS).enumerate() {
             let mut checks = 0;
-            let v = self.verifier(level);
+            let v = self.verifier(level, band);
             let r = quantize(
                 f,
                 self.id,
@@ -125,16 +164,26 @@ impl<'a> Certifier<'a> {
                 piece.b,
                 |qa, qb| {
                     checks += 1;
-                    v.is_hidden(qa, qb)
+                    in_band(qa, qb) && v.is_hidden(qa, qb)
                 },
             );
             stats.checks += checks;
             match r {
-                Ok(q) => {
-                    let geom = f.dequantize(self.id, self.ground, &q)?;
+                Ok(mut q) => {
+                    let mut geom = f.dequantize(self.id, self.ground, &q)?;
                     stats.stored += 1;
                     if n > 0 || checks > 1 {
                         stats.shrunk += 1;
+                    }
+                    let (qa, qb) = (DVec2::from(geom.a), DVec2::from(geom.b));
+                    while q.level + 1 < HEIGHT_LEVELS && std::env::var("VOCC_NORAISE").is_err() {
+                        stats.checks += 1;
+                        if !self.verifier(q.level + 1, band).is_hidden(qa, qb) {
+                            break;
+                        }
+                        q.level += 1;
+                        geom = f.dequantize(self.id, self.ground, &q)?;
+                        stats.raised += 1;
                     }
                     return Some(Certified {
                         q,

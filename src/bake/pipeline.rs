@@ -166,6 +166,8 @@ pub struct CellStats {
     /// Time per stage of the long generator, ms: hidden maps, proposals, rule-3 weights,
     /// selection with certification.
     pub stage_ms: [f64; 4],
+    /// Levels the stored VOs were raised by after quantization (rule 2's perspective bonus).
+    pub raised: usize,
     pub ms: f64,
 }
 
@@ -595,7 +597,11 @@ impl<'s> Plan<'s> {
             e
         };
         let mut t = Instant::now();
-        for &k in &stats.levels {
+        let mut all_props: Vec<(u8, DVec2, DVec2)> = Vec::new();
+        if let Ok(v) = std::env::var("VOCC_LEVELS") {
+            stats.levels = v.split(',').map(|x| x.parse().unwrap()).collect();
+        }
+        for &k in &stats.levels.clone() {
             let h = levels[k as usize];
             let polys = near
                 .iter()
@@ -603,25 +609,64 @@ impl<'s> Plan<'s> {
                 .filter(|(_, s)| s.top >= h)
                 .map(|(&i, _)| self.set.polys[i as usize].as_slice());
             let edges = super::hidden::boundary_edges(polys);
-            let map = super::hidden::HiddenMap::build(cell, &edges, &self.params.map);
-            stats.stage_ms[0] += clock(&mut t);
-            let props = super::propose::runs(cell, &map, &self.params.propose);
-            stats.stage_ms[1] += clock(&mut t);
-            for p in props {
-                let geom = crate::runtime::frame::VoGeom {
-                    a: p.a.to_array(),
-                    b: p.b.to_array(),
-                    g,
-                    h,
-                };
-                let hid = self.occludees.hidden(&view, &geom, radius);
-                if !hid.is_empty() {
-                    cands.push((k, p.a, p.b));
-                    hidden.push(hid);
-                }
+            let mut mp = self.params.map;
+            if let Ok(v) = std::env::var("VOCC_EYES") {
+                mp.edge_eyes = v.parse().unwrap();
             }
-            stats.stage_ms[2] += clock(&mut t);
+            if let Ok(v) = std::env::var("VOCC_BINS") {
+                mp.bins = v.parse().unwrap();
+            }
+            if let Ok(v) = std::env::var("VOCC_SCALE") {
+                let s: i32 = v.parse().unwrap();
+                mp.half = 512.0 * 2f64.powi(s);
+                mp.px = 2.0 * 2f64.powi(s);
+            }
+            if let Ok(v) = std::env::var("VOCC_PX") {
+                mp.px = v.parse().unwrap();
+            }
+            let map = super::hidden::HiddenMap::build(cell, &edges, &mp);
+            stats.stage_ms[0] += clock(&mut t);
+            let mut pp = self.params.propose;
+            if let Ok(v) = std::env::var("VOCC_PD") {
+                pp.per_direction = v.parse().unwrap();
+            }
+            if let Ok(v) = std::env::var("VOCC_DIRS") {
+                pp.directions = v.parse().unwrap();
+            }
+            if let Ok(v) = std::env::var("VOCC_SCALE") {
+                let s: i32 = v.parse().unwrap();
+                pp.max_offset = 512.0 * 2f64.powi(s) - 120.0;
+            }
+            let props = super::propose::runs(cell, &map, &pp);
+            stats.stage_ms[1] += clock(&mut t);
+            all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
         }
+        // The same segment proposed at several levels: the highest (its map says hidden
+        // there, and a taller VO hides at least as much).
+        let key = |p: &(u8, DVec2, DVec2)| {
+            (
+                p.1.x.to_bits(),
+                p.1.y.to_bits(),
+                p.2.x.to_bits(),
+                p.2.y.to_bits(),
+            )
+        };
+        all_props.sort_by(|x, y| key(x).cmp(&key(y)).then(y.0.cmp(&x.0)));
+        all_props.dedup_by(|x, y| key(x) == key(y));
+        for (k, a, b) in all_props {
+            let geom = crate::runtime::frame::VoGeom {
+                a: a.to_array(),
+                b: b.to_array(),
+                g,
+                h: levels[k as usize],
+            };
+            let hid = self.occludees.hidden(&view, &geom, radius);
+            if !hid.is_empty() {
+                cands.push((k, a, b));
+                hidden.push(hid);
+            }
+        }
+        stats.stage_ms[2] += clock(&mut t);
         stats.dense = cands.len();
         let certifier = super::certify::Certifier {
             frame: f,
@@ -634,7 +679,9 @@ impl<'s> Plan<'s> {
                 .zip(support)
                 .map(|(&i, s)| (self.set.polys[i as usize].as_slice(), *s))
                 .collect(),
-            verifiers: Default::default(),
+            verifiers: (0..HEIGHT_LEVELS as usize * super::certify::BANDS)
+                .map(|_| Default::default())
+                .collect(),
         };
         let mut cs = super::certify::CertifyStats::default();
         use super::certify::Piece;
@@ -663,7 +710,22 @@ impl<'s> Plan<'s> {
             start,
             &self.occludees.cost,
             self.params.max_vos,
+            std::env::var("VOCC_BUDGET").map_or(1000, |v| v.parse().unwrap()),
             |c| match c.value {
+                Vo::Piece(p) if std::env::var("VOCC_NOCERT").is_ok() => vec![Candidate {
+                    stage: Stage::Stored,
+                    value: Vo::Stored(
+                        QVo {
+                            x1: 0,
+                            y1: 0,
+                            x2: 1,
+                            y2: 1,
+                            level: p.level,
+                        },
+                        geom(p.level, p.a, p.b),
+                    ),
+                    hidden: c.hidden.clone(),
+                }],
                 Vo::Piece(p) if c.stage == Stage::Proposed => certifier
                     .pieces(p.level, p.a, p.b, &mut cs)
                     .into_iter()
@@ -696,6 +758,7 @@ impl<'s> Plan<'s> {
             .collect();
         stats.stage_ms[3] += clock(&mut t);
         stats.tried = cs.tried;
+        stats.raised = cs.raised;
         stats.shrunk = cs.shrunk;
         stats.dropped = cs.tried - cs.stored;
         stats.checks = cs.checks;

@@ -85,6 +85,9 @@ pub fn spread(cell: &[DVec2; 4], a: DVec2, b: DVec2) -> f64 {
     db.perp_dot(da).atan2(db.dot(da))
 }
 
+/// Offsets at which the bands of the coarse scan's ranking begin, metres.
+pub const BANDS_M: [f64; 3] = [200.0, 400.0, 800.0];
+
 /// A line of the scan: unit normal `n` (away from the cell centre `c`), offset `o`.
 #[derive(Clone, Copy, Debug)]
 struct Line {
@@ -215,9 +218,19 @@ pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Propos
             best.extend(found.iter().map(|&r| (l, scan.proposal(&l, r))));
             o += p.spacing;
         }
+        // The widest umbrae within each band of distances: near and far VOs both compete.
         best.sort_by(|x, y| y.1.spread.total_cmp(&x.1.spread));
-        for (l, seed) in best.into_iter().take(p.per_direction) {
-            out.push(refine(&scan, l, seed, p));
+        let mut taken = [0usize; BANDS_M.len() + 1];
+        for (l, seed) in best {
+            let band = BANDS_M.iter().filter(|&&d| l.o >= d).count();
+            if taken[band] < p.per_direction {
+                taken[band] += 1;
+                if std::env::var("VOCC_NOREFINE").is_ok() {
+                    out.push(seed);
+                } else {
+                    out.push(refine(&scan, l, seed, p));
+                }
+            }
         }
     }
     out

@@ -82,11 +82,13 @@ impl PartialOrd for Entry {
 }
 
 /// Lazy greedy selection (module header). `refine(c)` returns what candidate `c` (not yet
-/// stored) becomes one stage later: any number of candidates, each at a later stage.
+/// stored) becomes one stage later: any number of candidates, each at a later stage. At most
+/// `budget` proposals are refined (certification is what a bake spends most on).
 pub fn select<T>(
     candidates: Vec<Candidate<T>>,
     cost: &[u64],
     max_vos: usize,
+    budget: usize,
     mut refine: impl FnMut(&Candidate<T>) -> Vec<Candidate<T>>,
 ) -> Vec<T> {
     let mut all: Vec<Option<Candidate<T>>> = Vec::new();
@@ -108,6 +110,7 @@ pub fn select<T>(
     let mut covered: Vec<u32> = Vec::new();
     let mut hidden_cost: u64 = 0;
     let mut out = Vec::new();
+    let mut spent = 0;
     while out.len() < max_vos {
         let Some(top) = heap.pop() else { break };
         let Some(c) = all[top.idx].as_ref() else {
@@ -127,13 +130,29 @@ pub fn select<T>(
             break;
         }
         let c = all[top.idx].take().expect("checked above");
+        if c.stage == Stage::Proposed {
+            // At most `budget` proposals are certified; the rest are dropped.
+            if spent == budget {
+                continue;
+            }
+            spent += 1;
+        }
         if c.stage == Stage::Stored {
             hidden_cost += g;
             merge(&mut covered, &c.hidden);
             out.push(c.value);
             continue;
         }
-        for r in refine(&c) {
+        let rs = refine(&c);
+        if std::env::var("VOCC_DEBUG_SELECT").is_ok() {
+            let gs: Vec<u64> = rs.iter().map(|r| gain(&r.hidden, &covered, cost)).collect();
+            eprintln!(
+                "select: picked {} stage {:?} gain {g} -> {gs:?}",
+                out.len(),
+                c.stage
+            );
+        }
+        for r in rs {
             debug_assert!(r.stage > c.stage);
             push(r, &mut all, &mut heap);
         }
@@ -162,8 +181,8 @@ mod tests {
             stored(2, vec![5, 6]),
         ];
         let cost = vec![10; 7];
-        assert_eq!(select(c.clone(), &cost, 10, |_| vec![]), vec![0, 2, 1]);
-        assert_eq!(select(c, &cost, 2, |_| vec![]), vec![0, 2]);
+        assert_eq!(select(c.clone(), &cost, 10, 100, |_| vec![]), vec![0, 2, 1]);
+        assert_eq!(select(c, &cost, 2, 100, |_| vec![]), vec![0, 2]);
     }
 
     #[test]
@@ -179,7 +198,7 @@ mod tests {
         ];
         let cost = vec![1; 4];
         let mut refined = 0;
-        let picked = select(c, &cost, 10, |p| {
+        let picked = select(c, &cost, 10, 100, |p| {
             refined += 1;
             assert_eq!(p.value, 0);
             vec![stored(10, vec![0]), stored(11, vec![3])]
@@ -192,6 +211,6 @@ mod tests {
     fn diminishing_gain_stops_the_picks() {
         let c = vec![stored(0, vec![0]), stored(1, vec![1])];
         let cost = vec![1000, 5];
-        assert_eq!(select(c, &cost, 10, |_| vec![]), vec![0]);
+        assert_eq!(select(c, &cost, 10, 100, |_| vec![]), vec![0]);
     }
 }

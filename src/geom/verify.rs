@@ -85,8 +85,8 @@ pub const PROBE_M: f64 = 0.01;
 
 const END: u64 = 1 << PARAM_BITS;
 /// Debug counters.
-pub static STATS: [std::sync::atomic::AtomicU64; 4] =
-    [const { std::sync::atomic::AtomicU64::new(0) }; 4];
+pub static STATS: [std::sync::atomic::AtomicU64; 8] =
+    [const { std::sync::atomic::AtomicU64::new(0) }; 8];
 
 /// A hidden sub-interval of the verified segment: parameters along `a -> b` and the exact
 /// endpoints (each lies exactly on the segment).
@@ -515,7 +515,17 @@ impl<'a> Verifier<'a> {
                 .at_or_below(end, k)
                 .unwrap_or((k, par.at(k).unwrap_or(par.b)));
             let q = par.at(j).unwrap_or(par.a);
-            cache.ids = self.near(q, pe);
+            let mut ids = self.near(q, pe);
+            // Nearest the stretch's start first (ties by id: deterministic).
+            let dist = |i: u32| {
+                let (lo, hi) = self.boxes[i as usize];
+                (lo - q).max(q - hi).max(DVec2::ZERO).length_squared()
+            };
+            let mut keyed: Vec<(f64, u32)> = ids.iter().map(|&i| (dist(i), i)).collect();
+            keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            ids.clear();
+            ids.extend(keyed.into_iter().map(|x| x.1));
+            cache.ids = ids;
             cache.span = (j, e.max(k));
         }
         &cache.ids
@@ -665,34 +675,14 @@ impl<'a> Verifier<'a> {
                             None => valid(&self.chain(near, &pts, true)?),
                         }
                     };
-                    // The blockers nearest the point first: they subtend the widest angles, and
-                    // a few of them usually cover the cell; then all of them.
-                    let dist = |i: u32| {
-                        let (lo, hi) = self.boxes[i as usize];
-                        (lo - q).max(q - hi).max(DVec2::ZERO).length_squared()
-                    };
-                    let mut order: Vec<(f64, u32)> = ids.iter().map(|&i| (dist(i), i)).collect();
-                    let few = NEAREST_FIRST.min(order.len());
-                    let all: Vec<&[DVec2]>;
-                    let conds = if order.len() > few {
-                        order.select_nth_unstable_by(few, |a, b| {
-                            a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
-                        });
-                        let mut nearest: Vec<u32> = order[..few].iter().map(|x| x.1).collect();
-                        nearest.sort_unstable();
-                        let near: Vec<&[DVec2]> =
-                            nearest.iter().map(|&i| self.blockers[i as usize]).collect();
-                        match search(&near) {
-                            Some(c) => c,
-                            None => {
-                                all = ids.iter().map(|&i| self.blockers[i as usize]).collect();
-                                search(&all)?
-                            }
-                        }
-                    } else {
-                        all = ids.iter().map(|&i| self.blockers[i as usize]).collect();
-                        search(&all)?
-                    };
+                    // The blockers nearest the point first (the stretch's order, by distance
+                    // from its start): they subtend the widest angles, and a few of them often
+                    // cover the cell.
+                    let near: Vec<&[DVec2]> =
+                        ids.iter().map(|&i| self.blockers[i as usize]).collect();
+                    let found = search(&near);
+                    let conds = found?;
+                    STATS[6].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     STATS[2].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     (conds, true)
                 }
@@ -752,56 +742,113 @@ impl<'a> Verifier<'a> {
     fn chain(&self, near: &[&[DVec2]], pts: &[DVec2; 3], multi: bool) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
-        let (cl, cr) = tangent_vertices(q, self.cell)?;
+        let (cl, cr) = guess_tangents(q, self.cell)?;
         let (cl, cr) = (self.cell[cl], self.cell[cr]);
         let all = |f: &dyn Fn(DVec2) -> bool| pts.iter().all(|&p| f(p));
-        let mut arcs: Vec<Link> = Vec::new();
-        for (poly, b) in near.iter().enumerate() {
-            let Some((l, r)) = tangent_vertices(q, b) else {
-                continue;
-            };
-            // Only arcs that meet the cell's angle from q can be links (a cheap filter before
-            // the separating line; the conditions below decide).
-            if orient(q, cl, b[r]) == Cw || orient(q, b[l], cr) == Cw {
-                continue;
+        // Directions from q as pseudo-angles unwrapped about the cell's middle direction: the
+        // cell spans [ucl, ucr]. Only to decide when enough blockers have been read (the cover
+        // is then sought and checked exactly).
+        let mid = pseudo((cl + cr) * 0.5 - q);
+        let u = |x: DVec2| {
+            let d = pseudo(x - q) - mid;
+            if d > 2.0 {
+                d - 4.0
+            } else if d < -2.0 {
+                d + 4.0
+            } else {
+                d
             }
-            // Chords from the extreme vertices seen from each test point: near an umbra
-            // boundary, nearly collinear vertices trade places within millimetres.
-            let mut ls = vec![b[l]];
-            let mut rs = vec![b[r]];
-            for &p in &pts[1..(if multi { 3 } else { 1 })] {
-                if let Some((l, r)) = tangent_vertices(p, b) {
-                    if !ls.contains(&b[l]) {
-                        ls.push(b[l]);
+        };
+        let (ucl, ucr) = (u(cl), u(cr));
+        let mut spans: Vec<(f64, f64)> = Vec::new();
+        let covered = |spans: &mut Vec<(f64, f64)>| {
+            spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut reach = ucl;
+            for &(a, b) in spans.iter() {
+                if a > reach {
+                    return false;
+                }
+                reach = reach.max(b);
+                if reach >= ucr {
+                    return true;
+                }
+            }
+            reach >= ucr
+        };
+        let mut seps: Vec<Option<Option<SepLine>>> = vec![None; near.len()];
+        let mut arcs: Vec<Link> = Vec::new();
+        let mut next = 8usize;
+        for (poly, b) in near.iter().enumerate() {
+            if let Some((l, r)) = guess_tangents(q, b) {
+                // Only arcs that meet the cell's angle from q can be links (a cheap filter
+                // before the separating line; the conditions decide).
+                if guess(q, cl, b[r]) != Cw && guess(q, b[l], cr) != Cw {
+                    spans.push((u(b[l]).max(ucl), u(b[r]).min(ucr)));
+                    // Chords from the extreme vertices seen from each test point: near an
+                    // umbra boundary, nearly collinear vertices trade places within
+                    // millimetres.
+                    let mut ls = vec![b[l]];
+                    let mut rs = vec![b[r]];
+                    for &p in &pts[1..(if multi { 3 } else { 1 })] {
+                        if let Some((l, r)) = guess_tangents(p, b) {
+                            if !ls.contains(&b[l]) {
+                                ls.push(b[l]);
+                            }
+                            if !rs.contains(&b[r]) {
+                                rs.push(b[r]);
+                            }
+                        }
                     }
-                    if !rs.contains(&b[r]) {
-                        rs.push(b[r]);
+                    for &l in &ls {
+                        for &r in &rs {
+                            if all(&|p| guess(p, l, r) == Ccw) {
+                                // The separating line comes later, only for arcs the cover
+                                // picks.
+                                let sep = SepLine {
+                                    a: l,
+                                    b: r,
+                                    side: Ccw,
+                                };
+                                arcs.push(Link { l, r, sep, poly });
+                            }
+                        }
                     }
                 }
             }
-            for &l in &ls {
-                for &r in &rs {
-                    if all(&|p| orient(p, l, r) == Ccw) {
-                        // The separating line comes later, only for arcs the cover picks.
-                        let sep = SepLine {
-                            a: l,
-                            b: r,
-                            side: Ccw,
-                        };
-                        arcs.push(Link { l, r, sep, poly });
+            // Blockers come nearest first: the cover is sought once the arcs read so far seem
+            // to cover the cell's angle, and again after each doubling.
+            let last = poly + 1 == near.len();
+            if poly + 1 >= next || last {
+                next *= 2;
+                if (last || covered(&mut spans)) && !arcs.is_empty() {
+                    if let Some(path) = self.cover(near, pts, &mut arcs, &mut seps) {
+                        return Some(path);
                     }
                 }
             }
         }
-        // Separating lines per blocker, found when first needed (None inside: none exists).
-        let mut seps: Vec<Option<Option<SepLine>>> = vec![None; near.len()];
+        None
+    }
+
+    /// The greedy cover of the cell's angle by `arcs` (module header), with their separating
+    /// lines (`seps`, per blocker, found when first needed).
+    fn cover(
+        &self,
+        near: &[&[DVec2]],
+        pts: &[DVec2; 3],
+        arcs: &mut [Link],
+        seps: &mut [Option<Option<SepLine>>],
+    ) -> Option<Vec<Link>> {
+        use Orientation::*;
+        let q = pts[0];
+        let all = |f: &dyn Fn(DVec2) -> bool| pts.iter().all(|&p| f(p));
         let mut sep_of = |poly: usize| -> Option<SepLine> {
             *seps[poly].get_or_insert_with(|| separating_line(near[poly], self.cell, pts))
         };
-        let starts = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, k.l, c) != Cw));
-        let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| orient(p, c, k.r) != Cw));
+        let starts = |k: &Link| all(&|p| self.cell.iter().all(|&c| guess(p, k.l, c) != Cw));
+        let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| guess(p, c, k.r) != Cw));
         let overlaps =
-            |a: &Link, b: &Link| all(&|p| orient(p, b.l, a.r) != Cw && orient(p, a.r, b.r) != Cw);
+            |a: &Link, b: &Link| all(&|p| guess(p, b.l, a.r) != Cw && guess(p, a.r, b.r) != Cw);
         // Blockers that share a point `v` (a common vertex, or a vertex of one inside the
         // other) join through it: the chords `[a.l, v]` and `[v, b.r]` lie in their blockers
         // (convexity), are valid by (A), and make (O) hold trivially. Adjacent convex pieces of one footprint, and
@@ -826,7 +873,7 @@ impl<'a> Verifier<'a> {
         // Greedy cover, as for intervals on a line: from the start arc reaching furthest
         // counter-clockwise (seen from the anchor), repeatedly the joining arc that reaches
         // furthest, while it advances.
-        let further = |x: &Link, y: &Link| orient(q, y.r, x.r) == Ccw;
+        let further = |x: &Link, y: &Link| guess(q, y.r, x.r) == Ccw;
         let mut usable = vec![true; arcs.len()];
         let mut path: Vec<Link> = Vec::new();
         loop {
@@ -916,6 +963,67 @@ fn separating_line(b: &[DVec2], cell: &[DVec2], qs: &[DVec2]) -> Option<SepLine>
         }
     }
     None
+}
+
+/// Orientation in plain floating point. The search uses it only to choose candidates (tangent
+/// vertices, which arcs join, which reaches furthest); every condition of a certificate is then
+/// checked with the exact [`orient`], so a wrong guess can only lose a certificate.
+#[inline]
+fn guess(a: DVec2, b: DVec2, c: DVec2) -> Orientation {
+    let d = (b - a).perp_dot(c - a);
+    if d > 0.0 {
+        Orientation::Ccw
+    } else if d < 0.0 {
+        Orientation::Cw
+    } else {
+        Orientation::Collinear
+    }
+}
+
+/// [`tangent_vertices`] with [`guess`]: the extreme vertices of `poly` seen from `q`, or `None`
+/// when `q` seems to be inside or on it.
+fn guess_tangents(q: DVec2, poly: &[DVec2]) -> Option<(usize, usize)> {
+    let n = poly.len();
+    if n >= 3 && (0..n).all(|i| guess(poly[i], poly[(i + 1) % n], q) != Orientation::Cw) {
+        return None;
+    }
+    if n == 2 && guess(poly[0], poly[1], q) == Orientation::Collinear {
+        return tangent_vertices(q, poly);
+    }
+    let closer =
+        |i: usize, j: usize| (poly[i] - q).length_squared() < (poly[j] - q).length_squared();
+    let (mut l, mut r) = (0, 0);
+    for i in 1..n {
+        match guess(q, poly[l], poly[i]) {
+            Orientation::Cw => l = i,
+            Orientation::Collinear if closer(i, l) => l = i,
+            _ => {}
+        }
+        match guess(q, poly[r], poly[i]) {
+            Orientation::Ccw => r = i,
+            Orientation::Collinear if closer(i, r) => r = i,
+            _ => {}
+        }
+    }
+    Some((l, r))
+}
+
+/// A pseudo-angle of direction `d`, monotone in the true angle, in `[0, 4)`.
+fn pseudo(d: DVec2) -> f64 {
+    let s = d.x.abs() + d.y.abs();
+    if s == 0.0 {
+        return 0.0;
+    }
+    let t = d.y / s;
+    if d.x >= 0.0 {
+        if t >= 0.0 {
+            t
+        } else {
+            4.0 + t
+        }
+    } else {
+        2.0 - t
+    }
 }
 
 /// The midpoint of `[p, q]` when it is exactly representable (so lies exactly on the segment).
