@@ -105,7 +105,7 @@ fn scene_boxes<'py>(
 #[pyo3(signature = (
     paths, height_attr=None, base_attr=None, levels_attr=None, storey_height=3.0, lod=None,
     cell_size=100.0, eye=(1.5, 2.0), slices=None, max_vos=10, region=None, threads=None,
-    scan=false, spines=0, progress=None
+    effort="default", progress=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn bake<'py>(
@@ -122,8 +122,7 @@ fn bake<'py>(
     max_vos: usize,
     region: Option<(f64, f64, f64, f64)>,
     threads: Option<usize>,
-    scan: bool,
-    spines: usize,
+    effort: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)> {
     let opts = read_options(height_attr, base_attr, levels_attr, storey_height, lod);
@@ -135,9 +134,7 @@ fn bake<'py>(
         slices: slices.map_or(Slices::Auto, Slices::Fixed),
         max_vos,
         region: region.map(|(x0, y0, x1, y1)| [x0 - o.x, y0 - o.y, x1 - o.x, y1 - o.y]),
-        spines,
-        scan,
-        ..BakeParams::default()
+        ..BakeParams::default().with_effort(effort.parse().map_err(VoccError::new_err)?)
     };
     let mut job = BakeJob::new(&s, params).map_err(lib_err)?;
     if let Some(n) = threads {

@@ -229,13 +229,13 @@ def bake(
     max_vos: int = 10,
     region: Optional[tuple] = None,
     threads: Optional[int] = None,
-    scan: bool = False,
-    spines: int = 0,
+    effort: str = "default",
     progress: Union[None, bool, Progress] = None,
 ) -> BakedStore:
     """Bakes scene files into an occluder store, as ``vocc bake`` does (same options, same
     bytes). ``region`` is a world rectangle ``(x0, y0, x1, y1)``: only the cells meeting it are
-    baked. ``slices`` is 1..5, or None for automatic. ``threads`` defaults to every core.
+    baked. ``slices`` is 1..5, or None for automatic. ``effort`` is ``"fast"``, ``"default"`` or
+    ``"tight"`` (``vocc bake --effort``). ``threads`` defaults to every core.
 
     ``progress``: a callable ``progress(done, total)`` called from this thread as cells finish;
     None (the default) shows a tqdm bar when tqdm is installed; False shows nothing. The GIL is
@@ -261,8 +261,7 @@ def bake(
             int(max_vos),
             None if region is None else tuple(float(v) for v in region),
             threads,
-            bool(scan),
-            int(spines),
+            str(effort),
             progress,
         )
     finally:

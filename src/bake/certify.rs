@@ -53,7 +53,9 @@ pub struct Certified {
 pub struct CertifyStats {
     /// Proposals sent to the verifier.
     pub tried: usize,
-    /// Of those, certified and stored in some form.
+    /// Certified pieces sent to quantization ([`Certifier::store`]).
+    pub stores: usize,
+    /// Of those, stored in some form.
     pub stored: usize,
     /// Stored only after a lower level or a shorter grid segment replaced the proposal.
     pub shrunk: usize,
@@ -61,7 +63,7 @@ pub struct CertifyStats {
     pub checks: usize,
     /// Levels a stored VO was raised by after quantization.
     pub raised: usize,
-    /// Length proposed and length certified (the longest certified piece), metres.
+    /// Length proposed and length certified (all its pieces of at least [`MIN_PIECE_M`]), metres.
     pub proposed_m: f64,
     pub certified_m: f64,
 }
@@ -103,6 +105,8 @@ impl<'a> Certifier<'a> {
                     .filter(|(_, s)| s.supports(e0, e1, g, h, dn))
                     .map(|(p, _)| *p),
             )
+            // Pieces shorter than MIN_PIECE_M are dropped anyway.
+            .with_max_step(0.5 * MIN_PIECE_M)
         })
     }
 
@@ -134,7 +138,7 @@ impl<'a> Certifier<'a> {
                 .collect();
             if !out.is_empty() {
                 out.sort_by(|x, y| y.a.distance(y.b).total_cmp(&x.a.distance(x.b)));
-                stats.certified_m += out[0].a.distance(out[0].b);
+                stats.certified_m += out.iter().map(|p| p.a.distance(p.b)).sum::<f64>();
                 return out;
             }
         }
@@ -147,6 +151,7 @@ impl<'a> Certifier<'a> {
     /// level (whose blockers support it by rule 2) still certifies its dequantized segment.
     pub fn store(&self, piece: &Piece, stats: &mut CertifyStats) -> Option<Certified> {
         let f = self.frame;
+        stats.stores += 1;
         // Quantization moves an end by at most a grid diagonal.
         let margin = 2.0 * f.quantum;
         let band = self.band(piece.a, piece.b, margin);
@@ -176,7 +181,7 @@ impl<'a> Certifier<'a> {
                         stats.shrunk += 1;
                     }
                     let (qa, qb) = (DVec2::from(geom.a), DVec2::from(geom.b));
-                    while q.level + 1 < HEIGHT_LEVELS && std::env::var("VOCC_NORAISE").is_err() {
+                    while q.level + 1 < HEIGHT_LEVELS {
                         stats.checks += 1;
                         if !self.verifier(q.level + 1, band).is_hidden(qa, qb) {
                             break;

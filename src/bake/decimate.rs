@@ -54,11 +54,7 @@ impl Occludees {
                 [a.x, a.y, a.z, b.x, b.y, b.z]
             })
             .collect();
-        let cost = if std::env::var("VOCC_COUNT").is_ok() {
-            scene.objects.iter().map(|_| 1).collect()
-        } else {
-            scene.objects.iter().map(|o| o.cost.max(1)).collect()
-        };
+        let cost = scene.objects.iter().map(|o| o.cost.max(1)).collect();
         Occludees::new(boxes, cost)
     }
 

@@ -33,7 +33,7 @@ pub struct MapParams {
 impl Default for MapParams {
     fn default() -> Self {
         MapParams {
-            edge_eyes: 7,
+            edge_eyes: 3,
             bins: 1024,
             px: 4.0,
             half: 1024.0,
@@ -389,28 +389,32 @@ fn seg_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
 
 /// The outward-facing boundary edges of a set of blockers: every edge of every convex polygon,
 /// counter-clockwise, except an edge whose reverse is an edge of another polygon of the set (the
-/// inside of a footprint split into pieces). A 2-vertex blocker (a wall) gives both directions.
+/// inside of a footprint split into pieces). A 2-vertex blocker (a wall) gives both directions,
+/// always: a wall is thin, so its two faces cancel nothing (not even each other).
 pub fn boundary_edges<'a>(polys: impl Iterator<Item = &'a [DVec2]>) -> Vec<(DVec2, DVec2)> {
-    let mut all: Vec<(DVec2, DVec2)> = Vec::new();
+    let mut edges: Vec<(DVec2, DVec2)> = Vec::new();
+    let mut walls: Vec<(DVec2, DVec2)> = Vec::new();
     for p in polys {
         match p.len() {
             0 | 1 => {}
             2 => {
-                all.push((p[0], p[1]));
-                all.push((p[1], p[0]));
+                walls.push((p[0], p[1]));
+                walls.push((p[1], p[0]));
             }
             n => {
                 for i in 0..n {
-                    all.push((p[i], p[(i + 1) % n]));
+                    edges.push((p[i], p[(i + 1) % n]));
                 }
             }
         }
     }
     let key = |u: DVec2, v: DVec2| (u.x.to_bits(), u.y.to_bits(), v.x.to_bits(), v.y.to_bits());
-    let mut keys: Vec<(u64, u64, u64, u64)> = all.iter().map(|&(u, v)| key(u, v)).collect();
+    let mut keys: Vec<(u64, u64, u64, u64)> = edges.iter().map(|&(u, v)| key(u, v)).collect();
     keys.sort_unstable();
-    all.into_iter()
+    edges
+        .into_iter()
         .filter(|&(u, v)| keys.binary_search(&key(v, u)).is_err())
+        .chain(walls)
         .collect()
 }
 
@@ -470,5 +474,31 @@ mod tests {
         let b = sq(10.0, 0.0, 10.0);
         let e = boundary_edges([a.as_slice(), b.as_slice()].into_iter());
         assert_eq!(e.len(), 6);
+    }
+
+    /// Every wall dropped itself when its two directions were taken as a shared edge, so a scene
+    /// of walls alone (an open LoD2 mesh) hid nothing in the map.
+    #[test]
+    fn regression_walls_are_kept_in_both_directions() {
+        let wall = [DVec2::new(0.0, 20.0), DVec2::new(100.0, 20.0)];
+        let e = boundary_edges([wall.as_slice()].into_iter());
+        assert_eq!(e, vec![(wall[0], wall[1]), (wall[1], wall[0])]);
+        // A wall along a polygon's edge cancels nothing either.
+        let a = sq(0.0, 0.0, 10.0);
+        let w = [DVec2::new(10.0, 0.0), DVec2::new(10.0, 10.0)];
+        let e = boundary_edges([a.as_slice(), w.as_slice()].into_iter());
+        assert_eq!(e.len(), 6);
+        // And a row of walls hides what lies behind it.
+        let cell = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(100.0, 0.0),
+            DVec2::new(100.0, 100.0),
+            DVec2::new(0.0, 100.0),
+        ];
+        let wall = [DVec2::new(-250.0, 130.0), DVec2::new(350.0, 130.0)];
+        let e = boundary_edges([wall.as_slice()].into_iter());
+        let map = HiddenMap::build(&cell, &e, &MapParams::default());
+        assert!(map.hidden(DVec2::new(50.0, 200.0)));
+        assert!(!map.hidden(DVec2::new(50.0, 120.0)));
     }
 }

@@ -123,8 +123,11 @@ impl CellHashes {
                     p.slices,
                     p.max_vos,
                     &p.grow,
-                    p.spines,
-                    p.scan
+                    p.generator,
+                    p.weigh_m,
+                    p.map,
+                    p.propose,
+                    p.budget
                 )
             )
             .as_bytes(),

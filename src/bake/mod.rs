@@ -1,11 +1,13 @@
 //! The bake: from blockers to per-cell virtual occluders. One file per pipeline stage.
 //!
-//! Stages, in pipeline order: [`slice`] (slice heights and rule 2), [`seed`] (which blockers
-//! start a cluster), [`umbra`] (aggregate umbrae grown from a seed, and the dense set of 2D
-//! virtual occluders behind them), [`spine`] and [`scan`] (optional: VOs through blocks of touching
-//! buildings; long hidden runs of lines around the cell),
-//! [`decimate`] (the few most effective), [`quantize`] (5 bytes,
-//! conservatively). [`pipeline`] orchestrates them per cell and over cells; [`job`] is the whole
+//! Stages of the long generator (the default), in pipeline order: [`slice`] (slice heights and
+//! rule 2), [`hidden`] (per slice, a raster of what the cell's boundary cannot see, sampled),
+//! [`propose`] (the long hidden runs of lines on it), [`certify`] (the exact verifier cuts a
+//! proposal into certified pieces; quantization to 5 bytes, re-checked, then the highest level
+//! that still holds), [`select`] (lazy greedy by occludee cost hidden, certifying only what it
+//! picks). The growth generator, kept as a measured baseline: [`seed`], [`umbra`] (aggregate
+//! umbrae grown from single buildings) and [`decimate`] (the few most effective), with
+//! [`quantize`]. [`pipeline`] orchestrates them per cell and over cells; [`job`] is the whole
 //! bake as one library call (selection, shards, reuse, hashes, encoding, summary); [`svg`] draws
 //! one cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
 //! dequantized form; a VO that fails is shrunk or dropped and counted.
@@ -19,11 +21,9 @@ pub mod job;
 pub mod pipeline;
 pub mod propose;
 pub mod quantize;
-pub mod scan;
 pub mod seed;
 pub mod select;
 pub mod slice;
-pub mod spine;
 pub mod svg;
 pub mod umbra;
 

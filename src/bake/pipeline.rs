@@ -19,10 +19,8 @@ use rayon::prelude::*;
 
 use super::decimate::{greedy, Occludees};
 use super::quantize::{clip, quantize, window, Refused};
-use super::scan;
 use super::seed::area_angle;
 use super::slice::{choose_levels, d_near, Support};
-use super::spine;
 use super::umbra::{self, CellGrower, GrowParams};
 use super::BlockerSet;
 use crate::geom::predicates::{point_in_convex, Containment};
@@ -73,10 +71,6 @@ pub struct BakeParams {
     /// Bake only the cells meeting this walkable area (outer rings, local frame).
     pub walkable: Option<crate::scene::walkable::Area>,
     pub grow: GrowParams,
-    /// Blockers (largest area-angle first) that start a spine ([`super::spine`]); 0: none.
-    pub spines: usize,
-    /// Propose the hidden runs of scan lines around the cell ([`super::scan`]).
-    pub scan: bool,
     /// Which generator proposes the VOs.
     pub generator: Generator,
     /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres.
@@ -84,6 +78,34 @@ pub struct BakeParams {
     /// The long generator's sampled visibility and line scan.
     pub map: super::hidden::MapParams,
     pub propose: super::propose::ProposeParams,
+    /// Exact certifications the long generator's selection may run per cell ([`super::select`]).
+    pub budget: usize,
+}
+
+/// How hard the long generator looks, from fast to tight: how many eyes sample the cell's
+/// boundary, how many runs per direction are proposed, how many certifications a cell may run.
+/// Every setting is as safe as the others (only the exact verifier decides what is stored);
+/// they trade bake time for culled share (docs/RESULTS.md, "Speed against culling").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Effort {
+    Fast,
+    #[default]
+    Default,
+    Tight,
+}
+
+impl Effort {
+    /// The parameters of this effort, over `p`.
+    pub fn apply(self, p: &mut BakeParams) {
+        let (eyes, per_direction, budget) = match self {
+            Effort::Fast => (1, 1, 12),
+            Effort::Default => (3, 1, 25),
+            Effort::Tight => (7, 2, 60),
+        };
+        p.map.edge_eyes = eyes;
+        p.propose.per_direction = per_direction;
+        p.budget = budget;
+    }
 }
 
 /// Which generator proposes a cell's VOs.
@@ -108,13 +130,44 @@ impl Default for BakeParams {
                 verify: false,
                 ..GrowParams::default()
             },
-            spines: 0,
-            scan: false,
             generator: Generator::Long,
             weigh_m: 1500.0,
             map: super::hidden::MapParams::default(),
             propose: super::propose::ProposeParams::default(),
+            budget: 0,
         }
+        .with_effort(Effort::Default)
+    }
+}
+
+impl std::str::FromStr for Effort {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Effort, String> {
+        match s {
+            "fast" => Ok(Effort::Fast),
+            "default" => Ok(Effort::Default),
+            "tight" => Ok(Effort::Tight),
+            _ => Err(format!("expected fast, default or tight, got {s:?}")),
+        }
+    }
+}
+
+impl std::str::FromStr for Generator {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Generator, String> {
+        match s {
+            "long" => Ok(Generator::Long),
+            "growth" => Ok(Generator::Growth),
+            _ => Err(format!("expected long or growth, got {s:?}")),
+        }
+    }
+}
+
+impl BakeParams {
+    /// These parameters with the long generator's settings of `effort`.
+    pub fn with_effort(mut self, effort: Effort) -> BakeParams {
+        effort.apply(&mut self);
+        self
     }
 }
 
@@ -478,26 +531,6 @@ impl<'s> Plan<'s> {
                 consider(v.a, v.b, &v.chain, &mut cands, &mut hidden);
             }
         }
-        // Spines through blocks of touching blockers, from the blockers of largest area-angle.
-        if self.params.spines > 0 {
-            let mut starts: Vec<usize> = (0..near.len()).collect();
-            starts.sort_by(|&x, &y| adjusted[y].1.total_cmp(&adjusted[x].1).then(x.cmp(&y)));
-            let starts: Vec<u32> = starts
-                .into_iter()
-                .take(self.params.spines)
-                .map(|k| near[k])
-                .collect();
-            for sp in spine::spines(&self.set, &near, centre, &starts) {
-                consider(sp.a, sp.b, &sp.chain, &mut cands, &mut hidden);
-            }
-        }
-        if self.params.scan {
-            let size = f.grid.cell_size;
-            let ds: Vec<f64> = scan::DISTANCES.iter().map(|k| k * size).collect();
-            for r in scan::runs(&self.set, &near, &cell, &ds, scan::HALF_LENGTH * size) {
-                consider(r.a, r.b, &r.chain, &mut cands, &mut hidden);
-            }
-        }
         stats.dense = cands.len();
 
         // Decimation; each pick is quantized and re-checked from its dequantized form.
@@ -539,15 +572,6 @@ impl<'s> Plan<'s> {
                 first = false;
             }
             dropped += 1;
-            if std::env::var("VOCC_DEBUG").is_ok() {
-                let dn = d_near(&cell, &[a, b]);
-                let all = Verifier::new(
-                    &cell,
-                    near.iter().map(|&i| self.set.polys[i as usize].as_slice()),
-                )
-                .is_hidden(a, b);
-                eprintln!("drop cell {id} level {k} len {:.1} dn {dn:.1} float-hidden-all {all} a {a} b {b}", a.distance(b));
-            }
             None
         });
         stats.tried = tried;
@@ -598,9 +622,6 @@ impl<'s> Plan<'s> {
         };
         let mut t = Instant::now();
         let mut all_props: Vec<(u8, DVec2, DVec2)> = Vec::new();
-        if let Ok(v) = std::env::var("VOCC_LEVELS") {
-            stats.levels = v.split(',').map(|x| x.parse().unwrap()).collect();
-        }
         for &k in &stats.levels.clone() {
             let h = levels[k as usize];
             let polys = near
@@ -609,35 +630,9 @@ impl<'s> Plan<'s> {
                 .filter(|(_, s)| s.top >= h)
                 .map(|(&i, _)| self.set.polys[i as usize].as_slice());
             let edges = super::hidden::boundary_edges(polys);
-            let mut mp = self.params.map;
-            if let Ok(v) = std::env::var("VOCC_EYES") {
-                mp.edge_eyes = v.parse().unwrap();
-            }
-            if let Ok(v) = std::env::var("VOCC_BINS") {
-                mp.bins = v.parse().unwrap();
-            }
-            if let Ok(v) = std::env::var("VOCC_SCALE") {
-                let s: i32 = v.parse().unwrap();
-                mp.half = 512.0 * 2f64.powi(s);
-                mp.px = 2.0 * 2f64.powi(s);
-            }
-            if let Ok(v) = std::env::var("VOCC_PX") {
-                mp.px = v.parse().unwrap();
-            }
-            let map = super::hidden::HiddenMap::build(cell, &edges, &mp);
+            let map = super::hidden::HiddenMap::build(cell, &edges, &self.params.map);
             stats.stage_ms[0] += clock(&mut t);
-            let mut pp = self.params.propose;
-            if let Ok(v) = std::env::var("VOCC_PD") {
-                pp.per_direction = v.parse().unwrap();
-            }
-            if let Ok(v) = std::env::var("VOCC_DIRS") {
-                pp.directions = v.parse().unwrap();
-            }
-            if let Ok(v) = std::env::var("VOCC_SCALE") {
-                let s: i32 = v.parse().unwrap();
-                pp.max_offset = 512.0 * 2f64.powi(s) - 120.0;
-            }
-            let props = super::propose::runs(cell, &map, &pp);
+            let props = super::propose::runs(cell, &map, &self.params.propose);
             stats.stage_ms[1] += clock(&mut t);
             all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
         }
@@ -710,22 +705,8 @@ impl<'s> Plan<'s> {
             start,
             &self.occludees.cost,
             self.params.max_vos,
-            std::env::var("VOCC_BUDGET").map_or(1000, |v| v.parse().unwrap()),
+            self.params.budget,
             |c| match c.value {
-                Vo::Piece(p) if std::env::var("VOCC_NOCERT").is_ok() => vec![Candidate {
-                    stage: Stage::Stored,
-                    value: Vo::Stored(
-                        QVo {
-                            x1: 0,
-                            y1: 0,
-                            x2: 1,
-                            y2: 1,
-                            level: p.level,
-                        },
-                        geom(p.level, p.a, p.b),
-                    ),
-                    hidden: c.hidden.clone(),
-                }],
                 Vo::Piece(p) if c.stage == Stage::Proposed => certifier
                     .pieces(p.level, p.a, p.b, &mut cs)
                     .into_iter()
@@ -760,7 +741,7 @@ impl<'s> Plan<'s> {
         stats.tried = cs.tried;
         stats.raised = cs.raised;
         stats.shrunk = cs.shrunk;
-        stats.dropped = cs.tried - cs.stored;
+        stats.dropped = cs.stores - cs.stored;
         stats.checks = cs.checks;
         stats.proposed_m = cs.proposed_m;
         stats.certified_m = cs.certified_m;

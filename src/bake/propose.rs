@@ -25,21 +25,18 @@ fn snap(p: DVec2) -> DVec2 {
 /// Which lines are scanned and which runs are kept.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProposeParams {
-    /// Line normals of the coarse scan, evenly spread over the full turn.
+    /// Line normals of the scan, evenly spread over the full turn.
     pub directions: usize,
-    /// Spacing of parallel lines in the coarse scan, metres.
+    /// Spacing of parallel lines in the scan, metres.
     pub spacing: f64,
-    /// Sampling step along a line in the coarse scan, in pixels of the map.
-    pub coarse_step: usize,
+    /// Sampling step along a line in the scan, in pixels of the map.
+    pub step: usize,
     /// Farthest line from the cell centre, metres.
     pub max_offset: f64,
     /// Shortest run kept, metres.
     pub min_len: f64,
-    /// Runs kept per direction of the coarse scan (widest umbra first), each then refined.
+    /// Runs kept per direction and band of offsets ([`BANDS_M`]), widest umbra first.
     pub per_direction: usize,
-    /// Refinement: first turn and shift tried, degrees and metres (halved twice).
-    pub turn_deg: f64,
-    pub shift_m: f64,
 }
 
 impl Default for ProposeParams {
@@ -47,12 +44,10 @@ impl Default for ProposeParams {
         ProposeParams {
             directions: 32,
             spacing: 16.0,
-            coarse_step: 2,
+            step: 2,
             max_offset: 900.0,
             min_len: 60.0,
-            per_direction: 2,
-            turn_deg: 4.0,
-            shift_m: 8.0,
+            per_direction: 1,
         }
     }
 }
@@ -85,7 +80,7 @@ pub fn spread(cell: &[DVec2; 4], a: DVec2, b: DVec2) -> f64 {
     db.perp_dot(da).atan2(db.dot(da))
 }
 
-/// Offsets at which the bands of the coarse scan's ranking begin, metres.
+/// Offsets at which the bands of the scan's ranking begin, metres.
 pub const BANDS_M: [f64; 3] = [200.0, 400.0, 800.0];
 
 /// A line of the scan: unit normal `n` (away from the cell centre `c`), offset `o`.
@@ -106,18 +101,11 @@ struct Scan<'a> {
     cell: &'a [DVec2; 4],
     map: &'a HiddenMap,
     centre: DVec2,
-    half_w: f64,
     /// Half the chord of the map's circumcircle at offset 0.
     reach: f64,
 }
 
 impl Scan<'_> {
-    /// Whether the line clears the cell (its umbra is empty otherwise).
-    fn clear(&self, l: &Line) -> bool {
-        let n = l.normal();
-        l.o > self.half_w * (n.x.abs() + n.y.abs())
-    }
-
     /// The maximal hidden runs of `l`, sampled every `step` pixels, as parameters `(t0, t1)`
     /// along `n.perp()` from the foot of the line, shortened by a sample at each end.
     fn runs(&self, l: &Line, step: usize, min_len: f64, out: &mut Vec<(f64, f64)>) {
@@ -147,35 +135,6 @@ impl Scan<'_> {
         }
     }
 
-    /// The run of `l` through the point of it nearest `m`, at full resolution, if `m`'s pixel
-    /// is hidden: its parameters along `n.perp()` from the foot.
-    fn run_through(&self, l: &Line, m: DVec2) -> Option<(f64, f64)> {
-        let n = l.normal();
-        let along = n.perp();
-        let foot = self.centre + n * l.o;
-        let h = self.map.px;
-        let t = (m - foot).dot(along);
-        let q0 = self.map.raster(foot + along * t);
-        let d = along;
-        if !self.map.hidden_at(q0) {
-            return None;
-        }
-        let limit = (2.0 * self.reach / h) as i64;
-        let mut hi = 0;
-        let mut q = q0 + d;
-        while hi < limit && self.map.hidden_at(q) {
-            hi += 1;
-            q += d;
-        }
-        let mut lo = 0;
-        let mut q = q0 - d;
-        while lo > -limit && self.map.hidden_at(q) {
-            lo -= 1;
-            q -= d;
-        }
-        Some((t + (lo + 1) as f64 * h, t + (hi - 1) as f64 * h))
-    }
-
     fn proposal(&self, l: &Line, (t0, t1): (f64, f64)) -> Proposal {
         let n = l.normal();
         let along = n.perp();
@@ -189,9 +148,10 @@ impl Scan<'_> {
     }
 }
 
-/// The candidate runs of `map` around `cell`: a coarse scan of lines at every direction and
-/// offset, the runs of widest umbra per direction, each refined by turning and shifting its line
-/// about its middle while the umbra widens.
+/// The candidate runs of `map` around `cell`: a scan of lines at every direction and offset, the
+/// runs of widest umbra per direction and band of offsets. (A local search that turned and
+/// shifted each kept run's line while its umbra widened was tried and removed: it changed the
+/// culled share by less than the sampling noise.)
 pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Proposal> {
     let centre = (cell[0] + cell[2]) * 0.5;
     let half_w = 0.5
@@ -202,7 +162,6 @@ pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Propos
         cell,
         map,
         centre,
-        half_w,
         reach: 0.5 * map.n as f64 * map.px * std::f64::consts::SQRT_2,
     };
     let mut out: Vec<Proposal> = Vec::new();
@@ -214,7 +173,7 @@ pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Propos
         while o <= p.max_offset {
             let l = Line { phi, o };
             found.clear();
-            scan.runs(&l, p.coarse_step, p.min_len, &mut found);
+            scan.runs(&l, p.step, p.min_len, &mut found);
             best.extend(found.iter().map(|&r| (l, scan.proposal(&l, r))));
             o += p.spacing;
         }
@@ -225,55 +184,11 @@ pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Propos
             let band = BANDS_M.iter().filter(|&&d| l.o >= d).count();
             if taken[band] < p.per_direction {
                 taken[band] += 1;
-                if std::env::var("VOCC_NOREFINE").is_ok() {
-                    out.push(seed);
-                } else {
-                    out.push(refine(&scan, l, seed, p));
-                }
+                out.push(seed);
             }
         }
     }
     out
-}
-
-/// Local search about the middle of `seed` (on line `l`): turn by +-turn and shift by +-shift,
-/// moving while the umbra widens, then halve both, three times over.
-fn refine(scan: &Scan, mut l: Line, mut seed: Proposal, p: &ProposeParams) -> Proposal {
-    let (mut turn, mut shift) = (p.turn_deg.to_radians(), p.shift_m);
-    for _ in 0..3 {
-        for _ in 0..4 {
-            let m = (seed.a + seed.b) * 0.5;
-            let mut moved = false;
-            for (dphi, dso) in [(turn, 0.0), (-turn, 0.0), (0.0, shift), (0.0, -shift)] {
-                // Turning about the middle: the offset that keeps the line through m.
-                let phi = l.phi + dphi;
-                let n = DVec2::new(phi.cos(), phi.sin());
-                let cand = Line {
-                    phi,
-                    o: (m - scan.centre).dot(n) + dso,
-                };
-                if !scan.clear(&cand) {
-                    continue;
-                }
-                let Some(r) = scan.run_through(&cand, m + n * dso) else {
-                    continue;
-                };
-                if r.1 - r.0 < p.min_len {
-                    continue;
-                }
-                let q = scan.proposal(&cand, r);
-                if q.spread > seed.spread {
-                    (l, seed, moved) = (cand, q, true);
-                }
-            }
-            if !moved {
-                break;
-            }
-        }
-        turn *= 0.5;
-        shift *= 0.5;
-    }
-    seed
 }
 
 #[cfg(test)]

@@ -144,14 +144,6 @@ pub fn select<T>(
             continue;
         }
         let rs = refine(&c);
-        if std::env::var("VOCC_DEBUG_SELECT").is_ok() {
-            let gs: Vec<u64> = rs.iter().map(|r| gain(&r.hidden, &covered, cost)).collect();
-            eprintln!(
-                "select: picked {} stage {:?} gain {g} -> {gs:?}",
-                out.len(),
-                c.stage
-            );
-        }
         for r in rs {
             debug_assert!(r.stage > c.stage);
             push(r, &mut all, &mut heap);
@@ -210,7 +202,10 @@ mod tests {
     #[test]
     fn diminishing_gain_stops_the_picks() {
         let c = vec![stored(0, vec![0]), stored(1, vec![1])];
+        // 1 more after 1000 is below MIN_GAIN_SHARE (0.2%); 5 more is above it.
+        let cost = vec![1000, 1];
+        assert_eq!(select(c.clone(), &cost, 10, 100, |_| vec![]), vec![0]);
         let cost = vec![1000, 5];
-        assert_eq!(select(c, &cost, 10, 100, |_| vec![]), vec![0]);
+        assert_eq!(select(c, &cost, 10, 100, |_| vec![]), vec![0, 1]);
     }
 }

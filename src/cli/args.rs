@@ -7,7 +7,7 @@
 
 use clap::Args;
 
-use vocc::bake::pipeline::{Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
+use vocc::bake::pipeline::{Effort, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
 use vocc::runtime::frame::MAX_VOS_PER_CELL;
 use vocc::scene::{OnBadHeight, ReadOptions};
 
@@ -103,6 +103,16 @@ pub fn parse_slices(s: &str) -> Result<Slices, String> {
         Ok(n @ 1..=5) => Ok(Slices::Fixed(n)),
         _ => Err(format!("expected `auto` or 1 to 5, got {s:?}")),
     }
+}
+
+/// Parses `fast`, `default` or `tight`.
+pub fn parse_effort(s: &str) -> Result<Effort, String> {
+    s.parse()
+}
+
+/// Parses `long` or `growth`.
+pub fn parse_generator(s: &str) -> Result<Generator, String> {
+    s.parse()
 }
 
 /// Parses "X0,Y0,X1,Y1" with X0 <= X1 and Y0 <= Y1.

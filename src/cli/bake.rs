@@ -13,12 +13,12 @@ use clap::Args;
 
 use vocc::bake::incremental::hashes_path;
 use vocc::bake::job::{BakeJob, BakeSummary, JobError, ReuseRefusal};
-use vocc::bake::pipeline::{BakeParams, Slices};
+use vocc::bake::pipeline::{BakeParams, Effort, Generator, Slices};
 use vocc::scene;
 
 use crate::args::{
     parse_cell_size, parse_count, parse_count_u32, parse_eye, parse_max_vos, parse_rect,
-    parse_slices, ReadArgs,
+    parse_effort, parse_generator, parse_slices, ReadArgs,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::progress::Progress;
@@ -75,16 +75,15 @@ pub struct BakeArgs {
     /// the rest. The output is byte-identical to a full bake.
     #[arg(long, value_name = "OLD_STORE")]
     pub reuse: Option<PathBuf>,
-    /// Also propose VOs running through blocks of touching buildings, from this many blockers
-    /// per cell (largest area-angle first); 0: none. On Lyon, 64 culls about half again as many
-    /// objects for about four times the bake time (docs/RESULTS.md).
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub spines: usize,
-    /// Also propose VOs from the long hidden runs of lines around each cell, across blocks and
-    /// hidden streets. On Lyon it culls four to six times as many objects, for roughly ten times
-    /// the bake time (docs/RESULTS.md).
-    #[arg(long)]
-    pub scan: bool,
+    /// How hard the generator looks: `fast`, `default` or `tight`. All are equally safe; they
+    /// trade bake time for culled share (docs/RESULTS.md, "Speed against culling").
+    #[arg(long, default_value = "default", value_parser = parse_effort)]
+    pub effort: Effort,
+    /// Which generator proposes the VOs: `long` (long hidden runs of lines, the default) or
+    /// `growth` (aggregate umbrae grown from single buildings, the generator before 0.2; kept as a
+    /// measured baseline).
+    #[arg(long, default_value = "long", value_parser = parse_generator)]
+    pub generator: Generator,
     /// Print the summary as JSON on stdout (cells baked, reused and skipped, VOs, ms per cell,
     /// quantization, timings, bytes, the reuse decision, the scene's skipped objects by reason).
     #[arg(long)]
@@ -170,10 +169,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
         eye: a.eye,
         slices: a.slices,
         max_vos: a.max_vos,
-        spines: a.spines,
-        scan: a.scan,
+        generator: a.generator,
         region,
-        ..BakeParams::default()
+        ..BakeParams::default().with_effort(a.effort)
     };
     let mut job = BakeJob::new(&s, params)?;
     if let Some((i, n)) = shard {

@@ -93,6 +93,7 @@ pub fn render_store(
     vocc::runtime::culler::pvs(&f, id, &rec, &tree, &mut visible);
     // The baseline: this cell baked with single-building chains, same grid and eyes.
     let mut params = vocc::bake::pipeline::BakeParams {
+        generator: vocc::bake::pipeline::Generator::Growth,
         cell_size: f.grid.cell_size,
         eye: (f.eye_lo, f.eye_hi),
         ..Default::default()

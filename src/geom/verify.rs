@@ -54,8 +54,9 @@
 //! Parameters along `s` are dyadic, `t = j / 2^30`, and a point is used only when `a + t (b - a)`
 //! is exactly representable (checked), so it lies exactly on `s` and consecutive pieces tile `s`
 //! with no gap. From the current point `q` (first `a`) a certificate is read off at `q` and a
-//! probe point a little ahead (the tangent vertices of each blocker near them, then the shortest
-//! chain of overlapping chords that covers the cell's angle, by breadth-first search, joining
+//! probe point a little ahead (the tangent vertices of each blocker near them, then a
+//! chain of overlapping chords that covers the cell's angle, greedily (from the arc that covers the
+//! cell's first tangent, each time the arc reaching farthest), joining
 //! blockers that share a vertex through it), checked exactly at both. Every condition is affine
 //! along `s`, so where the certificate stops holding is estimated in floating point from its
 //! values at `q` and `b`; the estimate is rounded down to a dyadic point and the certificate is
@@ -64,6 +65,19 @@
 //! in one blocker lies in it (blockers are convex), and is hidden. Where no certificate is found,
 //! the sweep steps on, doubling its step from [`MIN_PIECE_M`], and the skipped part counts as
 //! visible: the output can only be smaller than the true hidden set, never larger.
+//! **Leaving a blocker.** Where the segment leaves a blocker `X` into the open, the certificate
+//! beyond needs `X` as a link, whose (A) fails inside `X`; so a piece `[q, p]` with `q` in `X`
+//! is accepted when a certificate holds at its anchor `m` and at `p`, `[q, m]` meets the chord
+//! `[l, r]` of `X`'s link, and every condition but that chord's (A) holds at `q`. *Proof.*
+//! `orient(x, l, r)` is affine along `[q, m]`, not positive at `q` and positive at `m`, so the
+//! segment meets the line of the chord once, at `x*`, which lies in `[l, r]` (they meet) and so
+//! in `X`: `[q, x*]` lies in `X`. On `(x*, m]` the chord's (A) holds strictly and every other
+//! condition holds at both ends, so the certificate holds there (Lemma 2); and on `[m, p]`.
+//! Likewise, a piece from a point of one blocker to a point of another is in their union when it
+//! meets a segment between two vertices that both contain (a shared edge of two pieces).
+//! Certificates found are kept per verifier (bucketed by position) and tried first at later
+//! points nearby; a cached certificate is checked exactly like a new one, so the cache saves
+//! searching and decides nothing.
 //! Only blockers meeting the convex hull of the cell and the current piece are searched (a
 //! spatial grid, then a floating-point filter that drops only blockers clear of the hull; leaving
 //! a blocker out can only certify less).
@@ -71,12 +85,15 @@
 use glam::DVec2;
 
 use super::predicates::{
-    common_tangents, orient, point_in_convex, set_side, tangent_vertices, Containment, Orientation,
-    SetSide,
+    common_tangents, orient, point_in_convex, segment_intersection, set_side, tangent_vertices,
+    Containment, Orientation, SegmentIntersection, SetSide,
 };
 
 /// Least step of the sweep past a point it cannot certify, metres.
 pub const MIN_PIECE_M: f64 = 0.01;
+/// Longest step of the sweep past points it cannot certify, metres: a hidden part shorter than
+/// this between visible ones may be missed (never claimed).
+pub const MAX_STEP_M: f64 = 0.5;
 /// Parameters along a verified segment are multiples of `2^-PARAM_BITS`.
 pub const PARAM_BITS: u32 = 30;
 /// The sweep's first probe ahead of its current point, metres (halved down to [`MIN_PIECE_M`]
@@ -84,9 +101,6 @@ pub const PARAM_BITS: u32 = 30;
 pub const PROBE_M: f64 = 0.01;
 
 const END: u64 = 1 << PARAM_BITS;
-/// Debug counters.
-pub static STATS: [std::sync::atomic::AtomicU64; 8] =
-    [const { std::sync::atomic::AtomicU64::new(0) }; 8];
 
 /// A hidden sub-interval of the verified segment: parameters along `a -> b` and the exact
 /// endpoints (each lies exactly on the segment).
@@ -313,6 +327,8 @@ pub struct Verifier<'a> {
     grid: Grid,
     /// Certificates found so far, tried first where they were found (module header).
     cache: std::cell::RefCell<CertCache>,
+    /// Longest step past points the sweep cannot certify, metres ([`MAX_STEP_M`]).
+    max_step_m: f64,
 }
 
 /// Certificates (their conditions) by where they held: each is listed in the buckets of the
@@ -466,7 +482,15 @@ impl<'a> Verifier<'a> {
             boxes,
             grid,
             cache: Default::default(),
+            max_step_m: MAX_STEP_M,
         }
+    }
+
+    /// This verifier, stepping at most `m` metres past points it cannot certify (it may then
+    /// miss hidden parts shorter than `m` between visible ones: it certifies less, never more).
+    pub fn with_max_step(mut self, m: f64) -> Self {
+        self.max_step_m = m.max(MIN_PIECE_M);
+        self
     }
 
     /// The blockers that may block a segment from the cell to `[a, b]`: those meeting the
@@ -552,6 +576,7 @@ impl<'a> Verifier<'a> {
         let par = Param { a, b, d: b - a };
         let steps = |m: f64| ((m / len * END as f64) as u64).clamp(1, END);
         let (min_step, probe) = (steps(MIN_PIECE_M), steps(PROBE_M));
+        let max_step = steps(self.max_step_m);
         let mut j = 0u64;
         let mut gap = min_step;
         let mut cache = NearCache {
@@ -559,9 +584,27 @@ impl<'a> Verifier<'a> {
             ahead: steps(NEAR_AHEAD_M),
             ids: Vec::new(),
         };
+        // The last point that could not be certified, after which the sweep stepped on.
+        let mut failed: Option<u64> = None;
         while j < END {
-            let Some(q) = par.at(j) else { break };
-            match self.piece_from(&par, (j, q), probe, &mut cache) {
+            let Some(mut q) = par.at(j) else { break };
+            let mut found = self.piece_from(&par, (j, q), probe, &mut cache);
+            // Stepping on doubles the step, so the first certified point may lie far past the
+            // start of the hidden part: bisect back towards the last failure, down to the
+            // least step.
+            if let (Some(_), Some(mut lo)) = (found, failed) {
+                while j - lo > min_step {
+                    let Some((mid, qm)) = par.at_or_below(lo + (j - lo) / 2, lo) else {
+                        break;
+                    };
+                    match self.piece_from(&par, (mid, qm), probe, &mut cache) {
+                        Some(r) => (j, q, found) = (mid, qm, Some(r)),
+                        None => lo = mid,
+                    }
+                }
+            }
+            failed = None;
+            match found {
                 Some((e, pe)) => {
                     match out.last_mut() {
                         Some(h) if h.p1 == q => {
@@ -582,11 +625,17 @@ impl<'a> Verifier<'a> {
                     if stop_at_gap {
                         break;
                     }
-                    let Some((k, _)) = par.at_or_below((j + gap).min(END), j) else {
+                    // The last probe ahead of `b` is tried too, however long the step.
+                    let last = END.saturating_sub(probe);
+                    if j >= last {
+                        break;
+                    }
+                    let Some((k, _)) = par.at_or_below((j + gap).min(last), j) else {
                         break;
                     };
+                    failed = Some(j);
                     j = k;
-                    gap = gap.saturating_mul(2);
+                    gap = gap.saturating_mul(2).min(max_step);
                 }
             }
         }
@@ -628,8 +677,6 @@ impl<'a> Verifier<'a> {
             Some((c, _)) => (c, false),
             None => {
                 let ids = self.near_cached(par, j, k, cache);
-                STATS[0].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                STATS[1].fetch_add(ids.len() as u64, std::sync::atomic::Ordering::Relaxed);
                 // Inside one blocker: the piece up to where the segment leaves it.
                 let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
                 let in_box = |i: u32, x: DVec2| {
@@ -657,13 +704,43 @@ impl<'a> Verifier<'a> {
                         })
                         .collect();
                     (conds, true)
+                } else if self.across_two(ids, q, p) {
+                    // From one blocker into one it meets: the piece is covered, and the sweep
+                    // goes on from p (inside the second).
+                    return Some((k, p));
                 } else {
-                    let anchor = exact_midpoint(q, p).unwrap_or(q);
+                    // Leaving a blocker, the chords are read from `p`, beyond its edge.
+                    let leaving = ids
+                        .iter()
+                        .any(|&i| in_box(i, q) && inside(self.blockers[i as usize], q));
+                    let anchor = if leaving {
+                        p
+                    } else {
+                        exact_midpoint(q, p).unwrap_or(q)
+                    };
                     let pts = [anchor, q, p];
+                    let near: Vec<&[DVec2]> =
+                        ids.iter().map(|&i| self.blockers[i as usize]).collect();
                     let valid = |links: &[Link]| {
                         let conds = conditions(links, self.cell);
-                        pts.iter()
-                            .all(|&x| conds.iter().all(|c| c.holds(x)))
+                        let holds = |x: DVec2| conds.iter().all(|c| c.holds(x));
+                        if !(holds(anchor) && holds(p)) {
+                            return None;
+                        }
+                        if holds(q) {
+                            return Some(conds);
+                        }
+                        // Leaving a blocker: `q` inside a link's blocker, `[q, anchor]`
+                        // crossing that link's chord, every other condition holding at `q`
+                        // (module header, "Leaving a blocker").
+                        let bridge = links.iter().find(|k| {
+                            inside(near[k.poly], q)
+                                && segment_intersection(q, anchor, k.l, k.r)
+                                    != SegmentIntersection::Disjoint
+                        })?;
+                        conds
+                            .iter()
+                            .all(|c| (c.strict && c.u == bridge.l && c.v == bridge.r) || c.holds(q))
                             .then_some(conds)
                     };
                     // Chords read at the anchor first; near an umbra boundary, from all three
@@ -678,12 +755,8 @@ impl<'a> Verifier<'a> {
                     // The blockers nearest the point first (the stretch's order, by distance
                     // from its start): they subtend the widest angles, and a few of them often
                     // cover the cell.
-                    let near: Vec<&[DVec2]> =
-                        ids.iter().map(|&i| self.blockers[i as usize]).collect();
                     let found = search(&near);
                     let conds = found?;
-                    STATS[6].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    STATS[2].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     (conds, true)
                 }
             }
@@ -694,10 +767,49 @@ impl<'a> Verifier<'a> {
         let end = self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x)));
         if fresh {
             self.cache.borrow_mut().add(conds, q, end.1);
-        } else {
-            STATS[3].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
         Some(end)
+    }
+
+    /// Whether `[q, p]` lies in the union of two blockers: `q` in one, `p` in another, and the
+    /// segment crosses a segment `[u, v]` between two vertices that both blockers contain (the
+    /// shared edge of two pieces of one footprint, or where two blockers overlap). *Proof.* The
+    /// crossing `x` lies in `[u, v]`, which lies in both blockers (convex, closed); so `[q, x]`
+    /// lies in the first and `[x, p]` in the second, and every point of `[q, p]` is in a
+    /// blocker, hence hidden (touching counts). All tests are exact.
+    fn across_two(&self, ids: &[u32], q: DVec2, p: DVec2) -> bool {
+        let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
+        let in_box = |i: u32, x: DVec2| {
+            let (lo, hi) = self.boxes[i as usize];
+            lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y
+        };
+        let holding = |x: DVec2| {
+            ids.iter()
+                .copied()
+                .filter(move |&i| in_box(i, x) && inside(self.blockers[i as usize], x))
+        };
+        for i in holding(q) {
+            for j in holding(p) {
+                if i == j {
+                    continue;
+                }
+                let (bi, bj) = (self.blockers[i as usize], self.blockers[j as usize]);
+                let both: Vec<DVec2> = bi
+                    .iter()
+                    .chain(bj)
+                    .copied()
+                    .filter(|&v| inside(bi, v) && inside(bj, v))
+                    .collect();
+                for (n, &u) in both.iter().enumerate() {
+                    for &v in &both[n..] {
+                        if segment_intersection(q, p, u, v) != SegmentIntersection::Disjoint {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
     }
 
     /// The largest exact parameter in `[k, est]` whose point passes `ok`, by checking `est` and
@@ -735,16 +847,15 @@ impl<'a> Verifier<'a> {
         (good, gp)
     }
 
-    /// The shortest chain of blocker chords whose conditions (S), (A), (O) and (C) hold at every
-    /// point of `pts`, by breadth-first search over the chords seen from `pts[0]`. Any chain
-    /// that is valid with fewer blockers is still found with more, so adding a blocker never
-    /// loses a certificate.
+    /// A chain of blocker chords whose conditions (S), (A), (O) and (C) hold at every point of
+    /// `pts`: the chords seen from `pts[0]` are read nearest blocker first until their
+    /// floating-point spans cover the cell's angle, then [`Self::cover`] picks a chain among
+    /// them and checks every condition exactly. Floating point only chooses what is tried.
     fn chain(&self, near: &[&[DVec2]], pts: &[DVec2; 3], multi: bool) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
         let (cl, cr) = guess_tangents(q, self.cell)?;
         let (cl, cr) = (self.cell[cl], self.cell[cr]);
-        let all = |f: &dyn Fn(DVec2) -> bool| pts.iter().all(|&p| f(p));
         // Directions from q as pseudo-angles unwrapped about the cell's middle direction: the
         // cell spans [ucl, ucr]. Only to decide when enough blockers have been read (the cover
         // is then sought and checked exactly).
@@ -801,7 +912,14 @@ impl<'a> Verifier<'a> {
                     }
                     for &l in &ls {
                         for &r in &rs {
-                            if all(&|p| guess(p, l, r) == Ccw) {
+                            // Where the piece leaves this blocker, its chord is not seen
+                            // from the start inside it ("Leaving a blocker").
+                            let seen = |x: DVec2| {
+                                guess(x, l, r) == Ccw
+                                    || (x == pts[1]
+                                        && point_in_convex(b, x) != Containment::Outside)
+                            };
+                            if pts.iter().all(|&x| seen(x)) {
                                 // The separating line comes later, only for arcs the cover
                                 // picks.
                                 let sep = SepLine {
@@ -830,8 +948,9 @@ impl<'a> Verifier<'a> {
         None
     }
 
-    /// The greedy cover of the cell's angle by `arcs` (module header), with their separating
-    /// lines (`seps`, per blocker, found when first needed).
+    /// A cover of the cell's angle by `arcs` (module header), greedy first, breadth-first when
+    /// the greedy gets stuck, with their separating lines (`seps`, per blocker, found when first
+    /// needed).
     fn cover(
         &self,
         near: &[&[DVec2]],
@@ -876,7 +995,7 @@ impl<'a> Verifier<'a> {
         let further = |x: &Link, y: &Link| guess(q, y.r, x.r) == Ccw;
         let mut usable = vec![true; arcs.len()];
         let mut path: Vec<Link> = Vec::new();
-        loop {
+        let greedy = loop {
             let prev = path.last().copied();
             let mut best: Option<usize> = None;
             for (j, b) in arcs.iter().enumerate() {
@@ -891,20 +1010,69 @@ impl<'a> Verifier<'a> {
                     best = Some(j);
                 }
             }
-            let k = best?;
+            let Some(k) = best else {
+                break false;
+            };
             match sep_of(arcs[k].poly) {
                 Some(sep) => {
                     arcs[k].sep = sep;
                     path.push(arcs[k]);
                     if ends(&arcs[k]) {
-                        break;
+                        break true;
                     }
                     if path.len() > arcs.len() {
-                        return None;
+                        break false;
                     }
                 }
                 None => usable[k] = false,
             }
+        };
+        if !greedy {
+            // The greedy can take an arc that joins nothing further (joins through a shared
+            // point do not order like intervals): a breadth-first search over the same arcs
+            // finds a chain whenever their joins (as the floating-point guesses see them) hold
+            // one, so adding blockers to the set cannot hide a chain from it.
+            let n = arcs.len();
+            let mut from = vec![usize::MAX; n];
+            let mut seen = vec![false; n];
+            let mut queue = std::collections::VecDeque::new();
+            for j in 0..n {
+                if starts(&arcs[j]) {
+                    if let Some(sep) = sep_of(arcs[j].poly) {
+                        arcs[j].sep = sep;
+                        seen[j] = true;
+                        queue.push_back(j);
+                    }
+                }
+            }
+            let mut end = None;
+            while let Some(k) = queue.pop_front() {
+                if ends(&arcs[k]) {
+                    end = Some(k);
+                    break;
+                }
+                for j in 0..n {
+                    if seen[j] || !further(&arcs[j], &arcs[k]) || !joins(&arcs[k], &arcs[j]) {
+                        continue;
+                    }
+                    if let Some(sep) = sep_of(arcs[j].poly) {
+                        arcs[j].sep = sep;
+                        seen[j] = true;
+                        from[j] = k;
+                        queue.push_back(j);
+                    }
+                }
+            }
+            let mut k = end?;
+            path.clear();
+            loop {
+                path.push(arcs[k]);
+                if from[k] == usize::MAX {
+                    break;
+                }
+                k = from[k];
+            }
+            path.reverse();
         }
         {
             {

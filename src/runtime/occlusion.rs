@@ -247,7 +247,8 @@ impl PreparedVo {
         }
         let mut top = view.e1 + (self.h - view.e1) * (d_near / self.d_far).max(1.0);
         if bx[5] + m > top && self.h > view.e1 {
-            top = view.e1 + (self.h - view.e1) * self.factor([x0, y0, x1, y1], d_near);
+            // Both bounds hold (ARCHITECTURE.md, rule 3): the larger one decides.
+            top = top.max(view.e1 + (self.h - view.e1) * self.factor([x0, y0, x1, y1], d_near));
         }
         // `zmin >= g` compares stored values, with no arithmetic: exact.
         let ok = bx[2] >= self.g && view.e0 >= self.g && bx[5] + m <= top && self.h >= view.e1;
@@ -350,21 +351,26 @@ mod tests {
 
     #[test]
     fn the_top_bound_follows_rule_3() {
-        // D_near = 15 < D_far = dist((10,0), (-20,20)) = sqrt(1300): the ratio is capped at 1,
-        // so the top bound is the VO's own top.
+        // D_near = 15 < D_far = dist((10,0), (-20,20)) = sqrt(1300): the plain ratio is capped
+        // at 1. The tighter bound: segments from the cell to the box x 3..7, y 25..28 cross the
+        // VO's line y = 20 between x = 5/3 and 25/3, so D_far' = dist((0,0), (25/3, 20)) =
+        // 65/3, and the box lies 5 m beyond the line: the factor is 1 + 5 / (65/3) = 16/13, the
+        // top 2 + 8 * 16/13 = 11.846 (less the margins).
         let v = view();
         let w = wall(10.0);
-        let top = 10.0;
-        let under = [3.0, 25.0, 0.0, 7.0, 28.0, top - 0.01];
-        let over = [3.0, 25.0, 0.0, 7.0, 28.0, top + 0.01];
+        let top = 2.0 + 8.0 * 16.0 / 13.0;
+        let under = [3.0, 25.0, 0.0, 7.0, 28.0, top - 0.02];
+        let over = [3.0, 25.0, 0.0, 7.0, 28.0, top + 0.02];
         assert!(hides(&v, &w, &under));
         assert!(!hides(&v, &w, &over));
         // Below the VO's bottom: visible under it.
-        assert!(!hides(&v, &w, &[3.0, 25.0, -1.0, 7.0, 28.0, 1.0]));
-        // Far behind (D_near = 90 > D_far), a box may rise above the VO's top.
-        let top = 2.0 + 8.0 * (90.0 - 0.002) / (1300f64.sqrt() + 0.002);
-        assert!(hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top - 0.01]));
-        assert!(!hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top + 0.01]));
+        assert!(!hides(&v, &w, &[3.0, 100.0, -1.0, 7.0, 101.0, 1.0]));
+        // Far behind: D_near = 90, the plain bound 2 + 8 * 90 / sqrt(1300) = 21.97; the tighter
+        // one, with crossings between x = 0.330 and 9.670 and the box 80 m beyond the line, is
+        // 2 + 8 * (1 + 80 / 22.215) = 38.81: the larger decides.
+        let top = 38.809;
+        assert!(hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top - 0.02]));
+        assert!(!hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top + 0.02]));
     }
 
     #[test]
@@ -456,8 +462,29 @@ mod tests {
         d_near > 0.0 && bx[2] >= vo.g && bx[5] + m <= top && vo.h >= v.e1
     }
 
+    /// Whether the 3D segment from eye `p` to point `w` passes through the VO's quad (the 2D
+    /// segments cross and the ray's height over the crossing lies in `[g, h]`): a brute-force
+    /// ray, written apart from the rule.
+    fn ray_meets_quad(vo: &VoGeom, p: [f64; 3], w: [f64; 3]) -> bool {
+        let (a, b) = (vo.a, vo.b);
+        let r = [w[0] - p[0], w[1] - p[1]];
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let den = r[0] * d[1] - r[1] * d[0];
+        if den == 0.0 {
+            return false;
+        }
+        let ap = [a[0] - p[0], a[1] - p[1]];
+        let t = (ap[0] * d[1] - ap[1] * d[0]) / den; // along p -> w
+        let u = (ap[0] * r[1] - ap[1] * r[0]) / den; // along a -> b
+        if !((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)) {
+            return false;
+        }
+        let z = p[2] + t * (w[2] - p[2]);
+        vo.g <= z && z <= vo.h
+    }
+
     #[test]
-    fn the_three_binding_planes_decide_as_all_nine_do() {
+    fn rule_3_with_the_tighter_bound_hides_only_what_3d_rays_show_hidden() {
         // A fixed linear congruential sequence: VOs around a 10 m cell, boxes around them.
         let mut x: u64 = 12345;
         let mut r = |lo: f64, hi: f64| {
@@ -467,7 +494,7 @@ mod tests {
             lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
         };
         let v = view();
-        let (mut hidden, mut outside) = (0, 0);
+        let (mut hidden, mut outside, mut gained) = (0, 0, 0);
         for _ in 0..4000 {
             let vo = VoGeom {
                 a: [r(-60.0, 70.0), r(-60.0, 70.0)],
@@ -483,14 +510,39 @@ mod tests {
                     r(0.5, 30.0),
                     r(0.5, 30.0),
                 );
-                let bx = [cx, cy, 0.0, cx + w, cy + d, r(0.5, 40.0)];
+                let bx = [cx, cy, 0.0, cx + w, cy + d, r(0.5, 80.0)];
                 let c = p.cover(&v, &bx);
-                assert_eq!(
-                    c == Cover::Hidden,
-                    plain_hidden(&v, &vo, &bx),
-                    "{vo:?} {bx:?}"
-                );
-                hidden += (c == Cover::Hidden) as usize;
+                // The plain rule (three planes, the D_near / D_far bound) is implied.
+                if plain_hidden(&v, &vo, &bx) {
+                    assert_eq!(c, Cover::Hidden, "{vo:?} {bx:?}");
+                }
+                if c == Cover::Hidden {
+                    hidden += 1;
+                    gained += !plain_hidden(&v, &vo, &bx) as usize;
+                    // Rays from eyes of the cell (corners, centre, random; lowest and highest
+                    // eye) to points of the box (corners, random) all pass through the quad.
+                    for k in 0..40 {
+                        let (ex, ey) = match k {
+                            0 => (0.0, 0.0),
+                            1 => (10.0, 0.0),
+                            2 => (10.0, 10.0),
+                            3 => (0.0, 10.0),
+                            4 => (5.0, 5.0),
+                            _ => (r(0.0, 10.0), r(0.0, 10.0)),
+                        };
+                        let e = [ex, ey, if k % 2 == 0 { v.e0 } else { v.e1 }];
+                        let wp = if k < 8 {
+                            [
+                                bx[3 * (k & 1)],
+                                bx[1 + 3 * ((k >> 1) & 1)],
+                                bx[2 + 3 * ((k >> 2) & 1)],
+                            ]
+                        } else {
+                            [r(bx[0], bx[3]), r(bx[1], bx[4]), r(bx[2], bx[5])]
+                        };
+                        assert!(ray_meets_quad(&vo, e, wp), "{vo:?} {bx:?} {e:?} {wp:?}");
+                    }
+                }
                 if c == Cover::Outside {
                     outside += 1;
                     // No sub-box is hidden.
@@ -504,14 +556,14 @@ mod tests {
                             cy + f * d + 0.1,
                             0.1,
                         ];
-                        assert!(!plain_hidden(&v, &vo, &sub), "{vo:?} {sub:?}");
+                        assert_ne!(p.cover(&v, &sub), Cover::Hidden, "{vo:?} {sub:?}");
                     }
                 }
             }
         }
         assert!(
-            hidden > 100 && outside > 1000,
-            "{hidden} hidden, {outside} outside"
+            hidden > 100 && outside > 1000 && gained > 10,
+            "{hidden} hidden ({gained} by the tighter bound alone), {outside} outside"
         );
     }
 }
