@@ -1,18 +1,36 @@
-//! The 2D fusion bound: how much any set of occluders built from the blockers outside a cell
-//! could cull, estimated by sampling. It tells what limits tightness: the VOs, or the cell.
+//! The 2D fusion bound and the 10-VO ceiling: how much occluders built from the blockers outside
+//! a cell could cull, estimated by sampling. They tell what limits tightness: the VOs, the
+//! generator, or the cell.
 //!
 //! Input: the scene (objects and blockers, local frame), a cell rectangle, and the sampling
-//! density (points on the cell's boundary, points per object).
-//! Output: [`hidden_2d`], the ascending ids of the objects whose sampled footprint points are all
-//! cut off from every sampled point of the cell by blockers whose interiors miss the cell,
-//! heights ignored (every blocker infinitely tall).
-//! Why it bounds the VO method: a stored VO certifies only a region that blockers disjoint from
-//! the cell hide in 2D (rule 1), and rule 3 adds heights, which can only cull less. So an object
-//! outside this set can be culled by no VO of this cell. Sampling makes the set optimistic (a
-//! visible object may look hidden if no sampled ray finds it), so it is an upper estimate of what
-//! VOs could cull: an estimate of the bound, not a certificate, and never used to cull.
+//! density ([`BoundParams`], [`CeilingParams`]).
+//! Output:
+//! - [`hidden_2d`], the ascending ids of the objects whose sampled footprint points are all cut
+//!   off from every sampled point of the cell by blockers whose interiors miss the cell, heights
+//!   ignored (every blocker infinitely tall);
+//! - [`ceiling_2d`], what `vos` ideal VOs could cull in 2D under the same model: candidate
+//!   segments are the long runs of sampled hidden points along lines around the cell; an object
+//!   is culled by one when its bounding box lies in the segment's umbra seen from the cell (the
+//!   runtime's single-umbra rule, tested here in plain f64 with a 1 mm margin on the side of
+//!   culling less); `vos` of them are chosen greedily by the objects they add. It is the ceiling
+//!   issue 11 measures (10 ideal VOs), for reports to compare the bake against.
+//!
+//! Why [`hidden_2d`] bounds the VO method: a stored VO certifies only a region that blockers
+//! disjoint from the cell hide in 2D (rule 1), and rule 3 adds heights, which can only cull less.
+//! So an object outside this set can be culled by no VO of this cell. Sampling makes the set
+//! optimistic (a visible object may look hidden if no sampled ray finds it), so it is an upper
+//! estimate of what VOs could cull: an estimate of the bound, not a certificate, and never used
+//! to cull. [`ceiling_2d`] is optimistic the same way (its segments are hidden only at the
+//! sampled points, from the sampled cell points) and lower in another (lines and offsets are
+//! sampled, the choice is greedy): an estimate of what 10 VOs reach in 2D, never used to cull.
+//! Each of its objects has its whole box in the umbra of a segment whose samples are hidden, so
+//! it is hidden too, up to sampling: the ceiling lies within [`hidden_2d`] but for sampling.
+//!
 //! Invariants: no code of the occlusion pipeline (bake, verifier, culler) is used, only the scene
-//! and the exact segment predicate; deterministic.
+//! and the exact segment predicate; both share one blocker index and one segment test
+//! ([`Outside`]); deterministic (rayon only splits work whose results keep their order).
+
+use std::ops::Range;
 
 use glam::DVec2;
 use rayon::prelude::*;
@@ -41,32 +59,82 @@ impl Default for BoundParams {
     }
 }
 
-/// Objects that sampled rays find hidden from the cell `r = [x0, y0, x1, y1]` in 2D, by the
-/// blockers outside it (module header). Objects without blockers are counted visible.
-pub fn hidden_2d(scene: &Scene, r: [f64; 4], p: &BoundParams) -> Vec<u32> {
-    let cell = [
+/// The blockers whose interiors miss a cell, indexed for segment tests: the model both estimates
+/// share (every such blocker infinitely tall, heights ignored).
+struct Outside<'a> {
+    scene: &'a Scene,
+    tree: RTree<GeomWithData<Rectangle<[f64; 2]>, u32>>,
+}
+
+impl<'a> Outside<'a> {
+    fn new(scene: &'a Scene, cell: &[DVec2; 4]) -> Self {
+        let tree = RTree::bulk_load(
+            (0..scene.blockers.len())
+                .filter(|&i| convex_interiors_disjoint(&scene.blockers[i].polygon, cell))
+                .map(|i| {
+                    let (lo, hi) = bounds(&scene.blockers[i].polygon);
+                    GeomWithData::new(Rectangle::from_corners(lo, hi), i as u32)
+                })
+                .collect(),
+        );
+        Outside { scene, tree }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.tree.size() == 0
+    }
+
+    /// Whether the closed segment `[a, b]` meets a blocker outside the cell, other than those in
+    /// `own`. `hint` is a blocker that blocked a nearby segment: it is tried first, and set to
+    /// the blocker found. The answer does not depend on the hint.
+    fn blocked(&self, a: DVec2, b: DVec2, own: Range<usize>, hint: &mut Option<u32>) -> bool {
+        let meets = |i: usize| {
+            !own.contains(&i) && segment_meets_convex(a, b, &self.scene.blockers[i].polygon)
+        };
+        if let Some(h) = *hint {
+            if meets(h as usize) {
+                return true;
+            }
+        }
+        // Step along the segment so the first blocker near the cell ends the search early.
+        let len = a.distance(b);
+        let steps = (len / 25.0).ceil().max(1.0) as usize;
+        for s in 0..steps {
+            let p0 = a + (b - a) * (s as f64 / steps as f64);
+            let p1 = a + (b - a) * ((s + 1) as f64 / steps as f64);
+            let (lo, hi) = (p0.min(p1), p0.max(p1));
+            let hit = self
+                .tree
+                .locate_in_envelope_intersecting(AABB::from_corners(lo.to_array(), hi.to_array()))
+                .find(|g| meets(g.data as usize));
+            if let Some(g) = hit {
+                *hint = Some(g.data);
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// The corners of the cell `r = [x0, y0, x1, y1]`, counter-clockwise from `(x0, y0)`.
+fn cell_corners(r: [f64; 4]) -> [DVec2; 4] {
+    [
         DVec2::new(r[0], r[1]),
         DVec2::new(r[2], r[1]),
         DVec2::new(r[2], r[3]),
         DVec2::new(r[0], r[3]),
-    ];
-    let outside: Vec<usize> = (0..scene.blockers.len())
-        .filter(|&i| convex_interiors_disjoint(&scene.blockers[i].polygon, &cell))
-        .collect();
-    let tree: RTree<GeomWithData<Rectangle<[f64; 2]>, u32>> = RTree::bulk_load(
-        outside
-            .iter()
-            .map(|&i| {
-                let (lo, hi) = bounds(&scene.blockers[i].polygon);
-                GeomWithData::new(Rectangle::from_corners(lo, hi), i as u32)
-            })
-            .collect(),
-    );
-    let per = (2.0 * (r[2] - r[0] + r[3] - r[1])) / p.cell_points as f64;
+    ]
+}
+
+/// `n` points evenly spread along the cell's boundary, the first `phase` spacings from corner 0
+/// (0: the corners are among them when `n` is a multiple of 4 on a square), each pulled a
+/// relative 1e-9 towards the centre so that none lies on a blocker touching the cell.
+fn boundary_points(cell: &[DVec2; 4], n: usize, phase: f64) -> Vec<DVec2> {
+    let per = 2.0 * (cell[2].x - cell[0].x + cell[2].y - cell[0].y) / n as f64;
     let centre = (cell[0] + cell[2]) * 0.5;
-    let eyes: Vec<DVec2> = (0..p.cell_points)
+    (0..n)
         .map(|k| {
-            let mut d = per * (k as f64 + 0.5);
+            let mut d = per * (k as f64 + phase);
             let mut at = cell[0];
             for i in 0..4 {
                 let (a, b) = (cell[i], cell[(i + 1) % 4]);
@@ -79,7 +147,15 @@ pub fn hidden_2d(scene: &Scene, r: [f64; 4], p: &BoundParams) -> Vec<u32> {
             }
             centre + (at - centre) * (1.0 - 1e-9)
         })
-        .collect();
+        .collect()
+}
+
+/// Objects that sampled rays find hidden from the cell `r = [x0, y0, x1, y1]` in 2D, by the
+/// blockers outside it (module header). Objects without blockers are counted visible.
+pub fn hidden_2d(scene: &Scene, r: [f64; 4], p: &BoundParams) -> Vec<u32> {
+    let cell = cell_corners(r);
+    let outside = Outside::new(scene, &cell);
+    let eyes = boundary_points(&cell, p.cell_points, 0.5);
     // Blocker ranges per object (blockers are grouped by object, in object order).
     let mut first = vec![usize::MAX; scene.objects.len()];
     let mut count = vec![0usize; scene.objects.len()];
@@ -88,26 +164,6 @@ pub fn hidden_2d(scene: &Scene, r: [f64; 4], p: &BoundParams) -> Vec<u32> {
         first[o] = first[o].min(i);
         count[o] += 1;
     }
-    let blocked = |a: DVec2, b: DVec2, own: std::ops::Range<usize>| -> bool {
-        // Step along the segment so the first blocker near the cell ends the search early.
-        let len = a.distance(b);
-        let steps = (len / 25.0).ceil().max(1.0) as usize;
-        for s in 0..steps {
-            let p0 = a + (b - a) * (s as f64 / steps as f64);
-            let p1 = a + (b - a) * ((s + 1) as f64 / steps as f64);
-            let (lo, hi) = (p0.min(p1), p0.max(p1));
-            let hit = tree
-                .locate_in_envelope_intersecting(AABB::from_corners(lo.to_array(), hi.to_array()))
-                .any(|g| {
-                    let i = g.data as usize;
-                    !own.contains(&i) && segment_meets_convex(a, b, &scene.blockers[i].polygon)
-                });
-            if hit {
-                return true;
-            }
-        }
-        false
-    };
     (0..scene.objects.len() as u32)
         .into_par_iter()
         .filter(|&o| {
@@ -130,11 +186,229 @@ pub fn hidden_2d(scene: &Scene, r: [f64; 4], p: &BoundParams) -> Vec<u32> {
                 })
                 .collect();
             let stride = pts.len().div_ceil(p.object_points).max(1);
-            pts.iter()
-                .step_by(stride)
-                .all(|&t| eyes.iter().all(|&e| blocked(e, t, own.clone())))
+            let mut hint = None;
+            pts.iter().step_by(stride).all(|&t| {
+                eyes.iter()
+                    .all(|&e| outside.blocked(e, t, own.clone(), &mut hint))
+            })
         })
         .collect()
+}
+
+/// Sampling of [`ceiling_2d`].
+#[derive(Clone, Copy, Debug)]
+pub struct CeilingParams {
+    /// Normal directions of the candidate lines, evenly over the full turn.
+    pub directions: usize,
+    /// Metres between parallel candidate lines; the nearest lies `step_m` clear of the cell.
+    pub spacing_m: f64,
+    /// Farthest line from the cell centre, metres.
+    pub max_offset_m: f64,
+    /// Metres between sampled points along a line.
+    pub step_m: f64,
+    /// Points on the cell's boundary, corners included, that a sampled point must be hidden from.
+    pub cell_points: usize,
+    /// Shortest candidate segment, metres.
+    pub min_len_m: f64,
+    /// How many segments are chosen.
+    pub vos: usize,
+}
+
+impl Default for CeilingParams {
+    fn default() -> Self {
+        CeilingParams {
+            directions: 24,
+            spacing_m: 24.0,
+            max_offset_m: 600.0,
+            step_m: 4.0,
+            cell_points: 16,
+            min_len_m: 20.0,
+            vos: 10,
+        }
+    }
+}
+
+/// What [`ceiling_2d`] found for one cell.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Ceiling {
+    /// Ascending ids of the objects culled by the chosen segments.
+    pub culled: Vec<u32>,
+    /// The chosen segments in the order picked, `[a.x, a.y, b.x, b.y]`, local frame.
+    pub vos: Vec<[f64; 4]>,
+    /// `by_count[k - 1]`: objects culled by the first `k` segments, `k = 1..=vos` (the last
+    /// count repeats when fewer segments add anything).
+    pub by_count: Vec<usize>,
+}
+
+/// Margin of the umbra test, metres: every side test must pass by this much.
+const UMBRA_MARGIN_M: f64 = 1e-3;
+
+/// Sampled points stay within this far beyond `max_offset_m` of the cell centre (per axis).
+const LINE_REACH_M: f64 = 200.0;
+
+/// What `p.vos` ideal VOs could cull from the cell `r = [x0, y0, x1, y1]` in 2D (module header):
+/// the hidden runs of the candidate lines as segments, the objects whose boxes lie in each one's
+/// umbra, and a greedy choice.
+pub fn ceiling_2d(scene: &Scene, r: [f64; 4], p: &CeilingParams) -> Ceiling {
+    let cell = cell_corners(r);
+    let outside = Outside::new(scene, &cell);
+    let mut out = Ceiling::default();
+    if outside.is_empty() || p.directions == 0 || p.cell_points == 0 || !(p.step_m > 0.0) {
+        out.by_count = vec![0; p.vos];
+        return out;
+    }
+    let eyes = boundary_points(&cell, p.cell_points, 0.0);
+    let centre = (cell[0] + cell[2]) * 0.5;
+    let half = (cell[2] - cell[0]) * 0.5;
+    let reach = p.max_offset_m + LINE_REACH_M;
+    // Every line: its normal and offset from the centre, in direction-then-offset order.
+    let lines: Vec<(DVec2, f64)> = (0..p.directions)
+        .flat_map(|k| {
+            let th = std::f64::consts::TAU * k as f64 / p.directions as f64;
+            let n = DVec2::new(th.cos(), th.sin());
+            let clear = n.x.abs() * half.x + n.y.abs() * half.y + p.step_m;
+            let count = if p.spacing_m > 0.0 && clear <= p.max_offset_m {
+                ((p.max_offset_m - clear) / p.spacing_m).floor() as usize + 1
+            } else {
+                0
+            };
+            (0..count).map(move |j| (n, clear + j as f64 * p.spacing_m))
+        })
+        .collect();
+    let candidates: Vec<[DVec2; 2]> = lines
+        .par_iter()
+        .flat_map_iter(|&(n, d)| hidden_runs(&outside, &eyes, centre, n, d, reach, p))
+        .collect();
+    // The objects in each candidate's umbra.
+    let boxes: Vec<[DVec2; 4]> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let (lo, hi) = (o.bbox.min.truncate(), o.bbox.max.truncate());
+            [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]
+        })
+        .collect();
+    let culls: Vec<Vec<u32>> = candidates
+        .par_iter()
+        .map(|&[a, b]| {
+            (0..boxes.len() as u32)
+                .filter(|&o| box_in_umbra(&cell, &boxes[o as usize], a, b))
+                .collect()
+        })
+        .collect();
+    // Greedy: each pick adds the most objects not yet culled; ties go to the first candidate.
+    let mut taken = vec![false; scene.objects.len()];
+    let mut total = 0usize;
+    for _ in 0..p.vos {
+        let best = culls
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (i, c.iter().filter(|&&o| !taken[o as usize]).count()))
+            .fold(None, |best: Option<(usize, usize)>, (i, g)| match best {
+                Some((_, bg)) if bg >= g => best,
+                _ => Some((i, g)),
+            });
+        if let Some((i, gain)) = best.filter(|&(_, g)| g > 0) {
+            for &o in &culls[i] {
+                taken[o as usize] = true;
+            }
+            total += gain;
+            let [a, b] = candidates[i];
+            out.vos.push([a.x, a.y, b.x, b.y]);
+        }
+        out.by_count.push(total);
+    }
+    out.culled = (0..scene.objects.len() as u32)
+        .filter(|&o| taken[o as usize])
+        .collect();
+    out
+}
+
+/// The candidate segments on the line `{x : n . (x - centre) = d}`: its points every `step_m`
+/// within `centre ± reach`, the maximal runs of those hidden from every eye, each shortened by
+/// one step at both ends and kept when at least `min_len_m` long; in order along the line.
+fn hidden_runs(
+    outside: &Outside,
+    eyes: &[DVec2],
+    centre: DVec2,
+    n: DVec2,
+    d: f64,
+    reach: f64,
+    p: &CeilingParams,
+) -> Vec<[DVec2; 2]> {
+    let u = n.perp();
+    let foot = centre + n * d;
+    // The parameter range of the line inside the square: |n.i d + u.i t| <= reach per axis.
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    for (ni, ui) in [(n.x, u.x), (n.y, u.y)] {
+        if ui.abs() > 1e-12 {
+            let (e0, e1) = ((-reach - ni * d) / ui, (reach - ni * d) / ui);
+            t0 = t0.max(e0.min(e1));
+            t1 = t1.min(e0.max(e1));
+        } else if (ni * d).abs() > reach {
+            return Vec::new();
+        }
+    }
+    if !(t1 >= t0) {
+        return Vec::new();
+    }
+    let samples = ((t1 - t0) / p.step_m).floor() as usize + 1;
+    let at = |k: usize| t0 + k as f64 * p.step_m;
+    // Coherence along the line: the eye that last saw a point is tried first, and each eye
+    // tries first the blocker that last blocked it.
+    let mut hints: Vec<Option<u32>> = vec![None; eyes.len()];
+    let mut seer = 0usize;
+    let mut hidden = |t: f64| -> bool {
+        let q = foot + u * t;
+        for j in 0..eyes.len() {
+            let e = (seer + j) % eyes.len();
+            if !outside.blocked(eyes[e], q, 0..0, &mut hints[e]) {
+                seer = e;
+                return false;
+            }
+        }
+        true
+    };
+    let mut runs = Vec::new();
+    let mut start: Option<usize> = None;
+    for k in 0..=samples {
+        let h = k < samples && hidden(at(k));
+        match (h, start) {
+            (true, None) => start = Some(k),
+            (false, Some(k0)) => {
+                let (ta, tb) = (at(k0) + p.step_m, at(k - 1) - p.step_m);
+                if tb - ta >= p.min_len_m {
+                    runs.push([foot + u * ta, foot + u * tb]);
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    runs
+}
+
+/// Signed distance of `x` from the line through `p` and `q` (`p != q`), positive to the left.
+fn side(p: DVec2, q: DVec2, x: DVec2) -> f64 {
+    (q - p).perp_dot(x - p) / p.distance(q)
+}
+
+/// Whether the segment `[c, w]` crosses the segment `[a, b]` with [`UMBRA_MARGIN_M`] to spare:
+/// `c` and `w` on opposite sides of the line `ab`, and `a` and `b` on opposite sides of the line
+/// `cw`, each at least the margin away (so rounding cannot turn a miss into a crossing).
+fn crosses(c: DVec2, w: DVec2, a: DVec2, b: DVec2) -> bool {
+    let m = UMBRA_MARGIN_M;
+    let apart = |x: f64, y: f64| (x >= m && y <= -m) || (x <= -m && y >= m);
+    c.distance(w) > m && apart(side(a, b, c), side(a, b, w)) && apart(side(c, w, a), side(c, w, b))
+}
+
+/// Whether the box (its corners) lies in the umbra of the segment `[a, b]` seen from the cell
+/// (its corners): every segment from a cell corner to a box corner crosses `[a, b]`. The umbra
+/// seen from one point is convex, and so is the set of points that see a given point through
+/// the segment, so corners decide for the whole cell and the whole box.
+fn box_in_umbra(cell: &[DVec2; 4], bx: &[DVec2; 4], a: DVec2, b: DVec2) -> bool {
+    bx.iter()
+        .all(|&w| cell.iter().all(|&c| crosses(c, w, a, b)))
 }
 
 fn bounds(p: &[DVec2]) -> ([f64; 2], [f64; 2]) {
@@ -143,4 +417,219 @@ fn bounds(p: &[DVec2]) -> ([f64; 2], [f64; 2]) {
         |(l, h), v| (l.min(*v), h.max(*v)),
     );
     (lo.to_array(), hi.to_array())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{load_bytes, ReadOptions};
+
+    /// A scene from axis-aligned boxes `[x0, y0, x1, y1]` (world metres), 20 m tall, in order.
+    fn boxes_scene(boxes: &[[f64; 4]]) -> Scene {
+        let features: Vec<String> = boxes
+            .iter()
+            .map(|[x0, y0, x1, y1]| {
+                format!(
+                    r#"{{"type":"Feature","properties":{{"height":20}},"geometry":{{"type":"Polygon","coordinates":[[[{x0},{y0}],[{x1},{y0}],[{x1},{y1}],[{x0},{y1}],[{x0},{y0}]]]}}}}"#
+                )
+            })
+            .collect();
+        let json = format!(
+            r#"{{"type":"FeatureCollection","features":[{}]}}"#,
+            features.join(",")
+        );
+        load_bytes(
+            &[("boxes.geojson".into(), json.as_bytes())],
+            &ReadOptions {
+                height_attr: Some("height".into()),
+                ..ReadOptions::default()
+            },
+        )
+        .unwrap()
+    }
+
+    /// The cell `[0, 0] - [100, 100]` (world) in the scene's local frame.
+    fn cell(s: &Scene) -> [f64; 4] {
+        let (x, y) = (s.origin.x, s.origin.y);
+        [-x, -y, 100.0 - x, 100.0 - y]
+    }
+
+    /// 26 touching buildings in a row from x = -600 to 700 at y = 130..150 (objects 0..26), two
+    /// objects the cell sees (26 in front of the row, 27 beside the cell), four behind the row
+    /// (28..32).
+    fn row_scene() -> Scene {
+        let mut b: Vec<[f64; 4]> = (0..26)
+            .map(|i| {
+                let x = -600.0 + 50.0 * i as f64;
+                [x, 130.0, x + 50.0, 150.0]
+            })
+            .collect();
+        b.push([40.0, 110.0, 60.0, 120.0]);
+        b.push([150.0, 40.0, 170.0, 60.0]);
+        b.push([-100.0, 200.0, -80.0, 215.0]);
+        b.push([40.0, 200.0, 60.0, 215.0]);
+        b.push([200.0, 200.0, 220.0, 215.0]);
+        b.push([0.0, 400.0, 30.0, 420.0]);
+        boxes_scene(&b)
+    }
+
+    #[test]
+    fn ceiling_culls_what_a_row_hides_and_nothing_in_front() {
+        let s = row_scene();
+        assert_eq!(s.objects.len(), 32);
+        let r = cell(&s);
+        let p = CeilingParams::default();
+        let c = ceiling_2d(&s, r, &p);
+        assert_eq!(c.culled, vec![28, 29, 30, 31], "{c:?}");
+        let hidden = hidden_2d(&s, r, &BoundParams::default());
+        assert!(
+            c.culled.iter().all(|o| hidden.binary_search(o).is_ok()),
+            "ceiling {:?} not within hidden {hidden:?}",
+            c.culled
+        );
+        assert_eq!(c.by_count.len(), p.vos);
+        assert!(
+            c.by_count.windows(2).all(|w| w[0] <= w[1]),
+            "{:?}",
+            c.by_count
+        );
+        assert_eq!(*c.by_count.last().unwrap(), c.culled.len());
+        // One segment behind the row culls all four; nothing adds more, so one is chosen.
+        assert_eq!(c.by_count[0], 4);
+        assert_eq!(c.vos.len(), 1);
+        let [ax, ay, bx, by] = c.vos[0];
+        let (ay, by) = (ay + s.origin.y, by + s.origin.y);
+        let (ax, bx) = (ax + s.origin.x, bx + s.origin.x);
+        assert!(
+            ay > 150.0 && by > 150.0 && ay < 200.0 && by < 200.0,
+            "{:?}",
+            c.vos
+        );
+        assert!(
+            (ax - bx).abs() > 500.0,
+            "a long segment along the row: {:?}",
+            c.vos
+        );
+    }
+
+    #[test]
+    fn ceiling_without_blockers_culls_nothing() {
+        let mut s = row_scene();
+        s.blockers.clear();
+        let c = ceiling_2d(&s, cell(&s), &CeilingParams::default());
+        assert!(c.culled.is_empty() && c.vos.is_empty(), "{c:?}");
+        assert_eq!(c.by_count, vec![0; 10]);
+        // Blockers that all meet the cell are not outside it: nothing either.
+        let s = boxes_scene(&[[-10.0, 40.0, 500.0, 60.0], [40.0, 200.0, 60.0, 215.0]]);
+        let mut only_inside = s.clone();
+        only_inside.blockers.retain(|b| b.object == 0);
+        let c = ceiling_2d(&only_inside, cell(&s), &CeilingParams::default());
+        assert!(c.culled.is_empty(), "{c:?}");
+    }
+
+    #[test]
+    fn umbra_test_keeps_its_margin_and_the_side_lines() {
+        let cell = cell_corners([0.0, 0.0, 10.0, 10.0]);
+        let (a, b) = (DVec2::new(-100.0, 20.0), DVec2::new(110.0, 20.0));
+        let bx = |x0: f64, y0: f64, x1: f64, y1: f64| {
+            [
+                DVec2::new(x0, y0),
+                DVec2::new(x1, y0),
+                DVec2::new(x1, y1),
+                DVec2::new(x0, y1),
+            ]
+        };
+        assert!(box_in_umbra(&cell, &bx(40.0, 30.0, 60.0, 40.0), a, b));
+        // Touching the segment's line, or within the margin of it: not culled.
+        assert!(!box_in_umbra(&cell, &bx(40.0, 20.0, 60.0, 40.0), a, b));
+        assert!(!box_in_umbra(&cell, &bx(40.0, 20.0005, 60.0, 40.0), a, b));
+        assert!(box_in_umbra(&cell, &bx(40.0, 20.01, 60.0, 40.0), a, b));
+        // In front of the segment, or past the side line through a cell corner and an end.
+        assert!(!box_in_umbra(&cell, &bx(40.0, 12.0, 60.0, 18.0), a, b));
+        assert!(!box_in_umbra(&cell, &bx(200.0, 30.0, 210.0, 40.0), a, b));
+        // The side line from the corner (10, 0) through b = (110, 20) reaches y = 30 at x = 160
+        // (the one from (10, 10) only at x = 210): a box just inside it at y = 30 is culled,
+        // one reaching past it is not.
+        assert!(box_in_umbra(&cell, &bx(150.0, 30.0, 159.0, 31.0), a, b));
+        assert!(!box_in_umbra(&cell, &bx(150.0, 30.0, 161.0, 31.0), a, b));
+    }
+
+    /// The ceiling on Lyon, 100 m cells (`cargo test --release --lib eval::bound -- --ignored
+    /// --nocapture`): per cell, the share of objects hidden in 2D and culled by the ceiling, and
+    /// the ceiling's milliseconds on one thread. Prints; asserts only what must hold.
+    #[test]
+    #[ignore]
+    fn ceiling_on_lyon_cells() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("data/lyon1/buildings_lyon1.geojson");
+        let s = crate::scene::load(
+            &[path],
+            &ReadOptions {
+                height_attr: Some("HAUTEUR".into()),
+                ..ReadOptions::default()
+            },
+        )
+        .unwrap();
+        let n = s.objects.len() as f64;
+        let e = s.extent();
+        // 100 m cells from the extent's corner that hold the centre of some object's box; five of
+        // them, evenly spread in that order.
+        let mut cells: Vec<(i64, i64)> = s
+            .objects
+            .iter()
+            .map(|o| {
+                let c = (o.bbox.min + o.bbox.max) * 0.5 - e.min;
+                ((c.x / 100.0).floor() as i64, (c.y / 100.0).floor() as i64)
+            })
+            .collect();
+        cells.sort_unstable();
+        cells.dedup();
+        let k = std::env::var("VOCC_CEILING_CELLS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(5usize);
+        let stride = (cells.len() / k).max(1);
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let p = CeilingParams::default();
+        let (mut hs, mut cs, mut ms) = (Vec::new(), Vec::new(), Vec::new());
+        for &(i, j) in cells.iter().skip(stride / 2).step_by(stride).take(k) {
+            let (x, y) = (e.min.x + 100.0 * i as f64, e.min.y + 100.0 * j as f64);
+            let r = [x, y, x + 100.0, y + 100.0];
+            let hidden = hidden_2d(&s, r, &BoundParams::default());
+            let t = std::time::Instant::now();
+            let c = one.install(|| ceiling_2d(&s, r, &p));
+            let t = t.elapsed().as_secs_f64() * 1e3;
+            let outside = c
+                .culled
+                .iter()
+                .filter(|o| hidden.binary_search(o).is_err())
+                .count();
+            let lens: Vec<f64> = c
+                .vos
+                .iter()
+                .map(|v| (v[2] - v[0]).hypot(v[3] - v[1]))
+                .collect();
+            println!(
+                "cell ({i}, {j}): hidden_2d {:.1}%, ceiling {:.1}% (by the first 1 to 10 VOs: {:?}), {outside} culled not in hidden_2d, {t:.0} ms, VO lengths {lens:.0?}",
+                100.0 * hidden.len() as f64 / n,
+                100.0 * c.culled.len() as f64 / n,
+                c.by_count.iter().map(|&b| format!("{:.1}", 100.0 * b as f64 / n)).collect::<Vec<_>>(),
+            );
+            assert!(c.by_count.windows(2).all(|w| w[0] <= w[1]));
+            hs.push(hidden.len() as f64 / n);
+            cs.push(c.culled.len() as f64 / n);
+            ms.push(t);
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        println!(
+            "{} cells: hidden_2d {:.1}%, ceiling {:.1}% (means), {:.0} ms per cell on one thread",
+            ms.len(),
+            100.0 * mean(&hs),
+            100.0 * mean(&cs),
+            mean(&ms)
+        );
+    }
 }
