@@ -19,7 +19,7 @@ use crate::runtime::format::{encode_store, CellRecord, Store};
 use crate::runtime::CellId;
 use crate::scene::{self, ReadOptions, Scene};
 
-use super::bound::{hidden_2d, BoundParams};
+use super::bound::{ceiling_2d, hidden_2d, BoundParams, CeilingParams};
 use super::metrics::{
     cell_vs, compare, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
     vo_rays_all, CellEval, Summary,
@@ -343,7 +343,7 @@ pub fn dataset_section(
         sample.len(),
         p.seed
     );
-    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings with the growth generator (chains never leave one object: no fusion); `--generator growth` is the generator before 0.2 (aggregate umbrae grown from seeds); `--effort fast|tight` are the default generator at less and more effort; quantization off evaluates each stored VO's unquantized segment by rule 3. The 2D fusion bound is no bake: it counts as culled every object whose sampled footprint points are cut off, in 2D, from {} points of the cell's boundary by the blockers outside the cell, heights ignored; no VO set of the cell can cull an object outside it, and its \"false culls\" are objects seen over roofs, which heights keep VOs from culling (`src/eval/bound.rs`). Machine: {}.\n", BoundParams::default().cell_points, machine());
+    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings with the growth generator (chains never leave one object: no fusion); `--generator growth` is the generator before 0.2 (aggregate umbrae grown from seeds); `--effort fast|tight` are the default generator at less and more effort; quantization off evaluates each stored VO's unquantized segment by rule 3. The 2D fusion bound is no bake: it counts as culled every object whose sampled footprint points are cut off, in 2D, from {} points of the cell's boundary by the blockers outside the cell, heights ignored; no VO set of the cell can cull an object outside it, and its \"false culls\" are objects seen over roofs, which heights keep VOs from culling (`src/eval/bound.rs`). The ceiling of 10 ideal VOs is no bake either: on lines at 24 directions every 24 m out to 600 m, the runs hidden in 2D from 16 points of the cell's boundary (sampled every 4 m) are candidates, and 10 are picked greedily by the objects whose boxes lie in their 2D umbra, heights ignored (`eval::bound::ceiling_2d`): what the representation could cull if heights cost nothing. Machine: {}.\n", BoundParams::default().cell_points, machine());
     let _ = writeln!(md, "{HEAD} bake ms/cell (median) |\n{RULE}---|");
     let mut speed: Vec<(String, f64, f64)> = Vec::new();
     let sample_main: Vec<CellEval> = eval_cells(&s, &store, &tree, &sample, &vs_sample);
@@ -431,6 +431,29 @@ pub fn dataset_section(
         &mut md,
         "2D fusion bound (estimate; not conservative)",
         &sbound,
+        " – |",
+    );
+    // The ceiling of 10 ideal VOs in 2D (eval::bound::ceiling_2d): the best long hidden
+    // segments, greedily, heights ignored.
+    progress(&format!("{}: ceiling of 10 ideal VOs", d.name));
+    let cp = CeilingParams::default();
+    let ceiling: Vec<CellEval> = sample
+        .iter()
+        .zip(&vs_sample)
+        .map(|(&id, vs)| {
+            let r = store.frame().grid.cell_rect(id).expect("in grid");
+            let c = ceiling_2d(&s, r, &cp);
+            let pvs: Vec<u32> = (0..s.objects.len() as u32)
+                .filter(|i| c.culled.binary_search(i).is_err())
+                .collect();
+            compare(&s, id, c.vos.len(), vs, &pvs)
+        })
+        .collect();
+    let sceil = summarize(&s, &ceiling);
+    row(
+        &mut md,
+        "ceiling: 10 ideal VOs in 2D (estimate; not conservative)",
+        &sceil,
         " – |",
     );
 
