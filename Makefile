@@ -46,15 +46,24 @@ lint:
 fresh-clone:
 	tools/fresh-clone.sh
 
-# Regenerates the pictures in docs/img: the paper's Fig. 3 configuration and a Lyon cell.
+# Regenerates the pictures in docs/img: the paper's Fig. 3 configuration, a Lyon cell, and two
+# Lyon cells before (the growth generator) and after (the long generator), like the paper's Fig. 8.
 pictures:
 	$(CARGO) test --locked --test umbra_cases
 	cp target/tmp/umbra-cases/fig3_staggered.svg docs/img/
 	$(CARGO) run --locked --release -- render --debug $(DEMO_SCENE) --height-attr HAUTEUR \
 		--at 1842000,5176050 -o docs/img/lyon_cell_100m.svg
 	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/lyon.vocc
+	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR --generator growth \
+		-o target/lyon_growth.vocc
 	$(CARGO) run --locked --release -- render target/lyon.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
 		--at 1842000,5176050 --radius 400 -o docs/img/lyon_cell_store.svg
+	for at in 1842000,5176050 1841450,5175850; do \
+		$(CARGO) run --locked --release -- render target/lyon_growth.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
+			--at $$at --radius 700 -o docs/img/lyon_before_$$at.svg; \
+		$(CARGO) run --locked --release -- render target/lyon.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
+			--at $$at --radius 700 -o docs/img/lyon_after_$$at.svg; \
+	done
 
 # Fuzzing (docs/FUZZING.md): every cargo-fuzz target for FUZZ_SECONDS each (default 600), one after
 # the other, growing fuzz/corpus/; logs in fuzz/logs/, findings in fuzz/artifacts/. Needs the

@@ -54,7 +54,11 @@ fn stored_vos_of_the_growth_generator_pass_rule_2_and_rule_1_from_their_bytes() 
         ..BakeParams::default()
     };
     let baked = bake(&s, params, None);
-    assert_ne!(baked.bytes, store_bytes(&s, 2), "the generator changed nothing");
+    assert_ne!(
+        baked.bytes,
+        store_bytes(&s, 2),
+        "the generator changed nothing"
+    );
     let store = Store::parse(&baked.bytes).expect("the bake writes a valid store");
     let (cells_with_vos, checked) = check_stored_vos(&s, &store);
     assert!(cells_with_vos >= 6, "only {cells_with_vos} cells got VOs");
@@ -101,7 +105,10 @@ fn stored_vos_from_wall_segments_alone_pass_rule_2_and_rule_1_from_their_bytes()
             Generator::Long => (2, 10),
             Generator::Growth => (1, 2),
         };
-        assert!(cells_with_vos >= cells, "{generator:?}: only {cells_with_vos} cells got VOs");
+        assert!(
+            cells_with_vos >= cells,
+            "{generator:?}: only {cells_with_vos} cells got VOs"
+        );
         assert!(checked >= vos, "{generator:?}: only {checked} VOs checked");
     }
 }

@@ -131,7 +131,7 @@ impl Default for BakeParams {
                 ..GrowParams::default()
             },
             generator: Generator::Long,
-            weigh_m: 1500.0,
+            weigh_m: 1000.0,
             map: super::hidden::MapParams::default(),
             propose: super::propose::ProposeParams::default(),
             budget: 0,

@@ -17,8 +17,8 @@ use vocc::bake::pipeline::{BakeParams, Effort, Generator, Slices};
 use vocc::scene;
 
 use crate::args::{
-    parse_cell_size, parse_count, parse_count_u32, parse_eye, parse_max_vos, parse_rect,
-    parse_effort, parse_generator, parse_slices, ReadArgs,
+    parse_cell_size, parse_count, parse_count_u32, parse_effort, parse_eye, parse_generator,
+    parse_max_vos, parse_rect, parse_slices, ReadArgs,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::progress::Progress;

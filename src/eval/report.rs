@@ -362,7 +362,11 @@ pub fn dataset_section(
         &sm_main,
         &format!(" {:.1} |", main_sample_ms.0),
     );
-    speed.push(("default".into(), main_sample_ms.0, 100.0 * sm_main.occluded_share));
+    speed.push((
+        "default".into(),
+        main_sample_ms.0,
+        100.0 * sm_main.occluded_share,
+    ));
 
     progress(&format!("{}: no-fusion baseline", d.name));
     let mut bp = BakeParams {
@@ -507,10 +511,7 @@ pub fn dataset_section(
     let _ = writeln!(md);
 
     // Cell sizes.
-    let _ = writeln!(
-        md,
-        "### Cell size, every cell\n"
-    );
+    let _ = writeln!(md, "### Cell size, every cell\n");
     let _ = writeln!(
         md,
         "Command: the default bake with `--cell-size 50`, `100`, `200`. Machine: {}.\n",
