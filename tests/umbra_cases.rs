@@ -40,7 +40,7 @@ fn assert_verifier_cuts_little(
         let lost = vo.a.distance(vo.b) - hidden;
         assert!(
             lost <= 0.05 * parts.len() as f64,
-            "{name} at {off}: the verifier cut {lost} m of a VO {} - {} into {} parts",
+            "{name} at {off}: the verifier cut {lost} m of a VO {} - {} into {} parts: {parts:?}",
             vo.a,
             vo.b,
             parts.len()

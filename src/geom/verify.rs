@@ -630,9 +630,20 @@ impl<'a> Verifier<'a> {
                     if j >= last {
                         break;
                     }
-                    let Some((k, _)) = par.at_or_below((j + gap).min(last), j) else {
-                        break;
+                    // The next exact point at least a step on (far from the origin, exact
+                    // points of a long segment can be sparse: step further until one is found).
+                    let mut step = gap;
+                    let next = loop {
+                        let target = j.saturating_add(step).min(last);
+                        if let Some((k, _)) = par.at_or_below(target, j) {
+                            break Some(k);
+                        }
+                        if target == last {
+                            break None;
+                        }
+                        step = step.saturating_mul(2);
                     };
+                    let Some(k) = next else { break };
                     failed = Some(j);
                     j = k;
                     gap = gap.saturating_mul(2).min(max_step);
@@ -651,7 +662,19 @@ impl<'a> Verifier<'a> {
         probe: u64,
         cache: &mut NearCache,
     ) -> Option<(u64, DVec2)> {
-        let (k, p) = par.at_or_below((j + probe).min(END), j)?;
+        // The probe point: the next exact point at least `probe` on (further when exact points
+        // are sparse, far from the origin).
+        let mut step = probe.max(1);
+        let (k, p) = loop {
+            let target = j.saturating_add(step).min(END);
+            if let Some(x) = par.at_or_below(target, j) {
+                break x;
+            }
+            if target == END {
+                return None;
+            }
+            step = step.saturating_mul(2);
+        };
         self.extend(par, (j, q), (k, p), cache)
     }
 
