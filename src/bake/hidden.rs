@@ -17,6 +17,8 @@
 
 use glam::DVec2;
 
+pub use crate::geom::pseudo_angle;
+
 /// How finely a [`HiddenMap`] samples visibility.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MapParams {
@@ -43,25 +45,6 @@ impl Default for MapParams {
 
 /// Bins per tile of the coarse maximum used to skip hidden edges.
 pub const TILE: usize = 16;
-
-/// A pseudo-angle of direction `d`, monotone in the true angle, in `[0, 4)`.
-#[inline]
-pub fn pseudo_angle(d: DVec2) -> f64 {
-    let s = d.x.abs() + d.y.abs();
-    if s == 0.0 {
-        return 0.0;
-    }
-    let t = d.y / s;
-    if d.x >= 0.0 {
-        if t >= 0.0 {
-            t
-        } else {
-            4.0 + t
-        }
-    } else {
-        2.0 - t
-    }
-}
 
 /// The unit direction of pseudo-angle `p`.
 fn direction(p: f64) -> DVec2 {

@@ -578,12 +578,26 @@ impl<'s> Plan<'s> {
         stats.shrunk = shrunk;
         stats.dropped = dropped;
         stats.checks = all_checks;
+        self.finish(id, ground, &view, vos, stats)
+    }
+
+    /// The record of a cell's picked VOs (stored form, and the form before quantization), with
+    /// the occludee cost they hide in `stats`.
+    fn finish(
+        &self,
+        id: CellId,
+        ground: u8,
+        view: &crate::runtime::frame::CellView,
+        vos: Vec<(QVo, crate::runtime::frame::VoGeom)>,
+        stats: &mut CellStats,
+    ) -> CellRecord {
+        let f = &self.frame;
         let (vos, before): (Vec<QVo>, Vec<crate::runtime::frame::VoGeom>) = vos.into_iter().unzip();
         stats.unquantized = before;
         let mut all: Vec<u32> = Vec::new();
         for q in &vos {
             if let Some(geom) = f.dequantize(id, ground, q) {
-                all.extend(self.occludees.hidden(&view, &geom, radius));
+                all.extend(self.occludees.hidden(view, &geom, self.reach()));
             }
         }
         all.sort_unstable();
@@ -745,19 +759,7 @@ impl<'s> Plan<'s> {
         stats.checks = cs.checks;
         stats.proposed_m = cs.proposed_m;
         stats.certified_m = cs.certified_m;
-        let (vos, before): (Vec<QVo>, Vec<crate::runtime::frame::VoGeom>) = vos.into_iter().unzip();
-        stats.unquantized = before;
-        let mut all: Vec<u32> = Vec::new();
-        for q in &vos {
-            if let Some(geom) = f.dequantize(id, ground, q) {
-                all.extend(self.occludees.hidden(&view, &geom, radius));
-            }
-        }
-        all.sort_unstable();
-        all.dedup();
-        stats.hidden_cost = self.occludees.cost_of(&all);
-        let ground = if vos.is_empty() { 0 } else { ground };
-        CellRecord::new(ground, &vos).expect("greedy stops at max_vos, checked <= 10 in Plan::new")
+        self.finish(id, ground, &view, vos, stats)
     }
 
     /// Rule 2 then rule 1 for a dequantized VO `a`–`b` of top `h`: the blockers that support it,

@@ -84,6 +84,8 @@
 
 use glam::DVec2;
 
+use super::pseudo_angle;
+
 use super::predicates::{
     common_tangents, orient, point_in_convex, segment_intersection, set_side, tangent_vertices,
     Containment, Orientation, SegmentIntersection, SetSide,
@@ -882,9 +884,9 @@ impl<'a> Verifier<'a> {
         // Directions from q as pseudo-angles unwrapped about the cell's middle direction: the
         // cell spans [ucl, ucr]. Only to decide when enough blockers have been read (the cover
         // is then sought and checked exactly).
-        let mid = pseudo((cl + cr) * 0.5 - q);
+        let mid = pseudo_angle((cl + cr) * 0.5 - q);
         let u = |x: DVec2| {
-            let d = pseudo(x - q) - mid;
+            let d = pseudo_angle(x - q) - mid;
             if d > 2.0 {
                 d - 4.0
             } else if d < -2.0 {
@@ -1197,24 +1199,6 @@ fn guess_tangents(q: DVec2, poly: &[DVec2]) -> Option<(usize, usize)> {
         }
     }
     Some((l, r))
-}
-
-/// A pseudo-angle of direction `d`, monotone in the true angle, in `[0, 4)`.
-fn pseudo(d: DVec2) -> f64 {
-    let s = d.x.abs() + d.y.abs();
-    if s == 0.0 {
-        return 0.0;
-    }
-    let t = d.y / s;
-    if d.x >= 0.0 {
-        if t >= 0.0 {
-            t
-        } else {
-            4.0 + t
-        }
-    } else {
-        2.0 - t
-    }
 }
 
 /// The midpoint of `[p, q]` when it is exactly representable (so lies exactly on the segment).
