@@ -31,8 +31,15 @@ use crate::runtime::frame::{Frame, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
 use crate::runtime::occlusion::{Cover, PreparedVo};
 
-/// Most boxes in a leaf.
-pub const LEAF_SIZE: usize = 4;
+/// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
+/// leaf kept, by [`PreparedVo::cover`] alone, from memory laid out in tree order): on the
+/// generated 10^5 city, leaves of 8 take about half the time of leaves of 4.
+pub const LEAF_SIZE: usize = 8;
+/// How a metre of box top weighs against a metre of horizontal extent when a node picks its
+/// split axis. Splitting by top puts boxes of like heights together, so rule 3's height test
+/// decides more groups whole (a node hidden, or too tall for a VO): on the generated 10^5 city,
+/// 10 takes about two thirds of the nodes and time of 1.
+const TOP_WEIGHT: f64 = 10.0;
 /// Depth of the traversal stack. A median split over `n` boxes is `ceil(log2(n / LEAF_SIZE))`
 /// deep, at most 30 for `u32` indices.
 const STACK: usize = 64;
@@ -69,14 +76,20 @@ pub fn box_is_valid(b: &[f64; 6]) -> bool {
     b.iter().all(|x| x.is_finite()) && b[0] <= b[3] && b[1] <= b[4] && b[2] <= b[5]
 }
 
+/// The key a box is split by on `axis`: its centre in x and y, [`TOP_WEIGHT`] times its top
+/// on the third axis.
 fn centre(b: &[f64; 6], axis: usize) -> f64 {
+    if axis == 2 {
+        return TOP_WEIGHT * b[5];
+    }
     // Halves first: no overflow for finite boxes.
     0.5 * b[axis] + 0.5 * b[axis + 3]
 }
 
 impl BoxTree {
-    /// Builds the hierarchy over `boxes` (local frame): median split of the box centres along
-    /// their longest extent, leaves of at most [`LEAF_SIZE`] boxes.
+    /// Builds the hierarchy over `boxes` (local frame): median split of the boxes' keys
+    /// ([`centre`]: x, y, and the top weighted by [`TOP_WEIGHT`]) along their longest extent,
+    /// leaves of at most [`LEAF_SIZE`] boxes.
     ///
     /// # Panics
     /// With more than `u32::MAX` boxes (object indices are `u32`).
@@ -305,6 +318,27 @@ fn test(
     Some(keep)
 }
 
+/// Whether a VO of `mask` hides box `bx`.
+#[inline]
+fn hidden(
+    prepared: &[Option<PreparedVo>; MAX_VOS_PER_CELL],
+    view: &crate::runtime::frame::CellView,
+    mask: u16,
+    bx: &[f64; 6],
+) -> bool {
+    let mut left = mask;
+    while left != 0 {
+        let i = left.trailing_zeros() as usize;
+        left &= left - 1;
+        if let Some(Some(p)) = prepared.get(i) {
+            if p.cover(view, bx) == Cover::Hidden {
+                return true;
+            }
+        }
+    }
+    false
+}
+
 /// The PVS of cell `id` with record `rec`: `out` is cleared, then holds the ascending indices
 /// of every object of `tree` that no VO of the cell hides.
 pub fn pvs(frame: &Frame, id: CellId, rec: &CellRecord, tree: &BoxTree, out: &mut Vec<u32>) {
@@ -380,7 +414,7 @@ pub fn pvs_with_stats(
         if node.left == LEAF {
             for k in range {
                 st.boxes_tested += 1;
-                if test(&prepared, &view, mask, &tree.boxes[k], tree.boxes[k][5]).is_none() {
+                if hidden(&prepared, &view, mask, &tree.boxes[k]) {
                     cull(out, tree.ids[k]);
                 }
             }

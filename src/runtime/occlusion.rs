@@ -57,6 +57,17 @@ pub struct PreparedVo {
     h: f64,
     /// Greatest distance between the grown cell and the VO.
     d_far: f64,
+    /// `1 / d_far` and `1 / d_line` (their rounding changes a height factor by a relative
+    /// 1e-16, a top by far less than the margin).
+    inv_d_far: f64,
+    inv_d_line: f64,
+    /// The signed distance beyond the VO's line (the side away from the cell) as a linear form,
+    /// `-orient(a, b, p) / |b - a|`.
+    beyond_form: [f64; 3],
+    /// Greatest distance between the grown cell and the VO's line, rounded down by the margin
+    /// (a lower bound of every `D_far'` of [`Self::factor`]; the least positive float when it is
+    /// not positive, so that the bound it gives is infinite).
+    d_line: f64,
     /// False when the VO's line meets the cell: its umbra is empty.
     usable: bool,
     /// The umbra's binding half-planes as linear forms `f(p) = k[0] p.x + k[1] p.y + k[2]`,
@@ -67,13 +78,13 @@ pub struct PreparedVo {
     /// `c_b` is the corner whose `b - c` is most clockwise. (Near-parallel candidates differ by
     /// rounding only, far below [`MARGIN_M`].)
     planes: [[f64; 3]; 3],
-    /// The VO's endpoints (shrunk, oriented with the cell on the left of `a -> b`).
-    a: [f64; 2],
-    b: [f64; 2],
-    /// The grown cell's corners.
-    cs: [[f64; 2]; 4],
-    /// Least distance between the grown cell and the VO (rounded down).
-    d_near: f64,
+    /// The grown cell's corners in the VO's coordinates: `(t, s)`, `t` along `a -> b` from
+    /// `a`, `s > 0` the distance from the VO's line.
+    ts: [[f64; 2]; 4],
+    /// `t` of a point as a linear form (unit direction `a -> b`, 0 at `a`).
+    along: [f64; 3],
+    /// `|b - a|` (shrunk).
+    len: f64,
 }
 
 /// `orient(u, v, p)` as a linear form in `p`.
@@ -133,23 +144,49 @@ impl PreparedVo {
         let l = linear(a, b);
         // orient(c, p, b) = orient(b, c, p).
         let planes = [[-l[0], -l[1], -l[2]], linear(ca, a), linear(b, cb)];
-        let mut d_near = f64::INFINITY;
+        let norm = planes[0][0].hypot(planes[0][1]);
+        let beyond_form = if norm > 0.0 {
+            planes[0].map(|k| k / norm)
+        } else {
+            [0.0; 3]
+        };
+        let u = if norm > 0.0 {
+            [(b[0] - a[0]) / norm, (b[1] - a[1]) / norm]
+        } else {
+            [0.0; 2]
+        };
+        let along = [u[0], u[1], -(u[0] * a[0] + u[1] * a[1])];
+        let ts = cs.map(|c| {
+            let k = beyond_form;
+            [
+                along[0] * c[0] + along[1] * c[1] + along[2],
+                -(k[0] * c[0] + k[1] * c[1] + k[2]),
+            ]
+        });
+        let mut d_line: f64 = 0.0;
         for c in cs {
-            d_near = d_near.min(point_segment(c, a, b));
+            d_line = d_line.max(orient(a, b, c).abs() / norm);
         }
-        for p in [a, b] {
-            d_near = d_near.min(point_rect(p, view.rect) - MARGIN_M);
-        }
+        let d_line = d_line - MARGIN_M;
+        let d_line = if d_line > 0.0 {
+            d_line
+        } else {
+            f64::MIN_POSITIVE
+        };
+        let d_far = d_far + MARGIN_M;
         PreparedVo {
+            inv_d_far: 1.0 / d_far,
+            inv_d_line: 1.0 / d_line,
             planes,
+            beyond_form,
             g: vo.g,
             h: vo.h,
-            d_far: d_far + MARGIN_M,
+            d_far,
+            d_line,
             usable,
-            a,
-            b,
-            cs,
-            d_near: (d_near - MARGIN_M).max(0.0),
+            ts,
+            along,
+            len: norm,
         }
     }
 
@@ -157,57 +194,63 @@ impl PreparedVo {
     /// lying in the umbra: `max(1, D_near / D_far', 1 + dist(F, line(s)) / D_far')`, where
     /// `D_far'` is the greatest distance from the cell to the part of the VO that segments
     /// from the cell to the footprint can cross (ARCHITECTURE.md, "Rule 3, the tighter bound").
-    fn factor(&self, fp: [f64; 4], d_near: f64) -> f64 {
+    fn factor(&self, fp: [f64; 4], d_near: f64, dl: f64) -> f64 {
         let m = MARGIN_M;
-        let (a, b) = (self.a, self.b);
-        let d = [b[0] - a[0], b[1] - a[1]];
-        let l2 = d[0] * d[0] + d[1] * d[1];
-        let len = l2.sqrt();
-        let cross = |u: [f64; 2], v: [f64; 2]| u[0] * v[1] - u[1] * v[0];
-        let ws = [
+        // In the VO's own coordinates (`t` along `a -> b` from `a`, `s` the distance beyond its
+        // line), the segment from a cell corner `(t_c, -s_c)` to a footprint corner
+        // `(t_w, s_w)` (`s_c, s_w > 0`) crosses the line at `t = (t_c s_w + t_w s_c) / (s_c +
+        // s_w)`. The crossings of the 16 corner pairs bound those of every segment from the
+        // cell to the footprint (both convex).
+        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+        for w in [
             [fp[0], fp[1]],
             [fp[2], fp[1]],
             [fp[2], fp[3]],
             [fp[0], fp[3]],
-        ];
-        // Crossings of the segments between corners of the cell and of the footprint with the
-        // VO's line: their parameters along a -> b bound those of every such segment.
-        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-        for c in self.cs {
-            for w in ws {
-                let cw = [w[0] - c[0], w[1] - c[1]];
-                let den = cross(cw, d);
-                if !(den.abs() > 0.0) {
-                    return 1.0;
-                }
-                let u = cross([a[0] - c[0], a[1] - c[1]], d) / den;
-                let x = [c[0] + u * cw[0] - a[0], c[1] + u * cw[1] - a[1]];
-                let t = (x[0] * d[0] + x[1] * d[1]) / l2;
+        ] {
+            let tw = self.along[0] * w[0] + self.along[1] * w[1] + self.along[2];
+            let k = self.beyond_form;
+            let sw = k[0] * w[0] + k[1] * w[1] + k[2];
+            if !(sw > 0.0) {
+                return 1.0;
+            }
+            for [tc, sc] in self.ts {
+                let t = (tc * sw + tw * sc) / (sc + sw);
                 t0 = t0.min(t);
                 t1 = t1.max(t);
             }
         }
-        let slack = m / len;
-        let (t0, t1) = ((t0 - slack).max(0.0), (t1 + slack).min(1.0));
+        let (t0, t1) = ((t0 - m).max(0.0), (t1 + m).min(self.len));
         if !(t0 <= t1) {
             return 1.0;
         }
-        let p0 = [a[0] + t0 * d[0], a[1] + t0 * d[1]];
-        let p1 = [a[0] + t1 * d[0], a[1] + t1 * d[1]];
-        let mut df: f64 = 0.0;
-        for c in self.cs {
-            for p in [p0, p1] {
-                df = df.max(((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)).sqrt());
-            }
+        // The greatest distance from a cell corner to the crossings' span `[t0, t1]`.
+        let mut df2: f64 = 0.0;
+        for [tc, sc] in self.ts {
+            let e = (t0 - tc).abs().max((t1 - tc).abs());
+            df2 = df2.max(e * e + sc * sc);
         }
-        let df = df + m;
-        // Distance of the footprint beyond the VO's line (the cell is on its left).
-        let mut dl = f64::INFINITY;
-        for w in ws {
-            dl = dl.min(-orient(a, b, w) / len);
-        }
-        let dl = (dl - m).max(0.0);
+        let df = df2.sqrt() + m;
         (d_near / df).max(1.0 + dl / df).max(1.0)
+    }
+
+    /// The least distance of the footprint `[x0, y0, x1, y1]` (grown) beyond the VO's line
+    /// (the cell is on its left), rounded down by the margin, and not below 0.
+    #[inline]
+    fn beyond(&self, fp: [f64; 4]) -> f64 {
+        let k = self.beyond_form;
+        let x = if k[0] >= 0.0 { fp[0] } else { fp[2] };
+        let y = if k[1] >= 0.0 { fp[1] } else { fp[3] };
+        (k[0] * x + k[1] * y + k[2] - MARGIN_M).max(0.0)
+    }
+
+    /// The greatest signed distance of the footprint `fp` beyond the VO's line (not rounded).
+    #[inline]
+    fn beyond_max(&self, fp: [f64; 4]) -> f64 {
+        let k = self.beyond_form;
+        let x = if k[0] >= 0.0 { fp[2] } else { fp[0] };
+        let y = if k[1] >= 0.0 { fp[3] } else { fp[1] };
+        k[0] * x + k[1] * y + k[2]
     }
 
     /// How this VO covers box `bx = [xmin, ymin, zmin, xmax, ymax, zmax]` seen from `view`.
@@ -216,7 +259,56 @@ impl PreparedVo {
             return Cover::Outside;
         }
         let m = MARGIN_M;
-        let (x0, y0, x1, y1) = (bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m);
+        let fp = [bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m];
+        if let Some(c) = self.footprint(fp) {
+            return c;
+        }
+        // Heights. `zmin >= g` compares stored values, with no arithmetic: exact.
+        if !(bx[2] >= self.g && view.e0 >= self.g && self.h >= view.e1) {
+            return Cover::Partial;
+        }
+        // A box touching the cell (D_near = 0) is refused outright.
+        let [cx0, cy0, cx1, cy1] = view.rect;
+        let dx = (fp[0] - (cx1 + m)).max((cx0 - m) - fp[2]).max(0.0);
+        let dy = (fp[1] - (cy1 + m)).max((cy0 - m) - fp[3]).max(0.0);
+        if !(dx > 0.0 || dy > 0.0) {
+            return Cover::Partial;
+        }
+        let z = bx[5] + m;
+        // Every factor below is at least 1: a box no taller than the VO is hidden.
+        if z <= self.h {
+            return Cover::Hidden;
+        }
+        if !(self.h > view.e1) {
+            return Cover::Partial;
+        }
+        // Hidden when `z <= e1 + (h - e1) * F` for a valid factor `F`; the larger of the
+        // plain and the tighter bound decides (ARCHITECTURE.md, rule 3). The tighter factor
+        // `max(D_near, D_far' + dl) / D_far'` lies between its value at `D_far' = D_far`
+        // (`D_far' <= D_far`) and at `D_far' = d_line` (`<= D_far'`): the exact one, with its
+        // 16 crossings, is computed only when the top falls between the two.
+        let need = (z - view.e1) / (self.h - view.e1);
+        let d_near = (dx * dx + dy * dy).sqrt();
+        let dl = self.beyond(fp);
+        if d_near.max(self.d_far + dl) * self.inv_d_far >= need {
+            return Cover::Hidden;
+        }
+        if d_near.max(self.d_line + dl) * self.inv_d_line < need {
+            return Cover::Partial;
+        }
+        if self.factor(fp, d_near, dl) >= need {
+            Cover::Hidden
+        } else {
+            Cover::Partial
+        }
+    }
+
+    /// The footprint test of [`Self::cover`] for the grown footprint `fp`: `Some(Outside)` when
+    /// it lies wholly outside one of the umbra's half-planes, `Some(Partial)` when it is not
+    /// strictly inside all three, `None` when it is.
+    #[inline]
+    fn footprint(&self, fp: [f64; 4]) -> Option<Cover> {
+        let [x0, y0, x1, y1] = fp;
         // Over the box, each linear form is least and greatest at the corners its coefficients
         // pick. All corners strictly in every half-plane is needed for Hidden; all corners
         // outside one of them (non-strictly) gives Outside.
@@ -226,36 +318,17 @@ impl PreparedVo {
             let (lo_y, hi_y) = if k[1] >= 0.0 { (y0, y1) } else { (y1, y0) };
             let max = k[0] * hi_x + k[1] * hi_y + k[2];
             if !(max > 0.0) {
-                return Cover::Outside;
+                return Some(Cover::Outside);
             }
             let min = k[0] * lo_x + k[1] * lo_y + k[2];
             if !(min > 0.0) {
                 all_in = false;
             }
         }
-        if !all_in {
-            return Cover::Partial;
-        }
-        // Heights. A box touching the cell has D_near = 0 and fails the top test unless the
-        // VO does not rise above the eyes; it is also refused outright.
-        let [cx0, cy0, cx1, cy1] = view.rect;
-        let dx = (x0 - (cx1 + m)).max((cx0 - m) - x1).max(0.0);
-        let dy = (y0 - (cy1 + m)).max((cy0 - m) - y1).max(0.0);
-        let d_near = (dx * dx + dy * dy).sqrt();
-        if d_near <= 0.0 {
-            return Cover::Partial;
-        }
-        let mut top = view.e1 + (self.h - view.e1) * (d_near / self.d_far).max(1.0);
-        if bx[5] + m > top && self.h > view.e1 {
-            // Both bounds hold (ARCHITECTURE.md, rule 3): the larger one decides.
-            top = top.max(view.e1 + (self.h - view.e1) * self.factor([x0, y0, x1, y1], d_near));
-        }
-        // `zmin >= g` compares stored values, with no arithmetic: exact.
-        let ok = bx[2] >= self.g && view.e0 >= self.g && bx[5] + m <= top && self.h >= view.e1;
-        if ok {
-            Cover::Hidden
+        if all_in {
+            None
         } else {
-            Cover::Partial
+            Some(Cover::Partial)
         }
     }
 }
@@ -263,51 +336,31 @@ impl PreparedVo {
 impl PreparedVo {
     /// How this VO covers a group of boxes with bounds `bounds` whose least top is `min_top`:
     /// [`Self::cover`] of the bounds, except that `Partial` becomes `Outside` when no box of the
-    /// group can meet rule 3's height bound. A box inside the bounds is at most `d_max` (the
-    /// greatest distance between the cell and the bounds' footprint) from the cell, so its
-    /// `D_near <= d_max` and its top bound is at most `e1 + (h - e1) max(1, d_max / D_far)`; a
-    /// group whose every top exceeds that has no box this VO hides.
+    /// group can meet rule 3's height bound. For a box inside the bounds, `D_near` and its
+    /// distance `dl` beyond the VO's line are at most those of the bounds' farthest points
+    /// (`d_max`, `dl_max`), and both of rule 3's factors are at most
+    /// `max(1, d_max / d_line, 1 + dl_max / d_line)`, as `D_far >= D_far' >= d_line`; a group
+    /// whose every top exceeds the top that factor allows has no box this VO hides.
     pub fn cover_group(&self, view: &CellView, bounds: &[f64; 6], min_top: f64) -> Cover {
         let c = self.cover(view, bounds);
         if c != Cover::Partial {
             return c;
         }
+        let m = MARGIN_M;
         let [cx0, cy0, cx1, cy1] = view.rect;
         let dx = (bounds[3] - cx0).abs().max((cx1 - bounds[0]).abs());
         let dy = (bounds[4] - cy0).abs().max((cy1 - bounds[1]).abs());
-        let d_max = (dx * dx + dy * dy).sqrt() + 2.0 * MARGIN_M;
-        // Every factor of a box inside is at most 1 + d_max / d_near(s): its D_near and its
-        // distance beyond the VO's line are at most d_max, and D_far' >= d_near(s).
-        let top_max = if self.d_near > 0.0 {
-            view.e1 + (self.h - view.e1).max(0.0) * (1.0 + d_max / self.d_near)
-        } else {
-            f64::INFINITY
-        };
-        if min_top > top_max + MARGIN_M {
+        let d_max = (dx * dx + dy * dy).sqrt() + 2.0 * m;
+        let fp = [bounds[0] - m, bounds[1] - m, bounds[3] + m, bounds[4] + m];
+        let dl_max = self.beyond_max(fp) + m;
+        let f_max = (d_max.max(self.d_line + dl_max) * self.inv_d_line).max(1.0);
+        let top_max = view.e1 + (self.h - view.e1).max(0.0) * f_max;
+        if min_top > top_max + m {
             Cover::Outside
         } else {
             Cover::Partial
         }
     }
-}
-
-/// Least distance from `p` to the segment `[a, b]`.
-fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let d = [b[0] - a[0], b[1] - a[1]];
-    let l2 = d[0] * d[0] + d[1] * d[1];
-    let t = if l2 > 0.0 {
-        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    ((p[0] - a[0] - t * d[0]).powi(2) + (p[1] - a[1] - t * d[1]).powi(2)).sqrt()
-}
-
-/// Least distance from `p` to the rectangle `[x0, y0, x1, y1]`.
-fn point_rect(p: [f64; 2], r: [f64; 4]) -> f64 {
-    let dx = (r[0] - p[0]).max(p[0] - r[2]).max(0.0);
-    let dy = (r[1] - p[1]).max(p[1] - r[3]).max(0.0);
-    (dx * dx + dy * dy).sqrt()
 }
 
 /// Whether `vo` hides box `bx` from `view` (rule 3).
