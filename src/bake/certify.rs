@@ -9,7 +9,8 @@
 //! proposal; the longest is quantized ([`quantize`]), and every quantized candidate is checked
 //! again from its dequantized form: rule 2 for the dequantized segment, then the verifier on the
 //! blockers that pass. When rule 2 leaves too few blockers at the proposal's level, lower levels
-//! are tried.
+//! are tried. A stored VO is then raised while rule 2 still holds, first by the band's bound,
+//! then by the tighter bound for its own segment.
 //! Invariant: what is returned passed rule 2 and the exact verifier in exactly the form the
 //! runtime decodes (ARCHITECTURE.md invariant 10).
 
@@ -63,6 +64,8 @@ pub struct CertifyStats {
     pub checks: usize,
     /// Levels a stored VO was raised by after quantization.
     pub raised: usize,
+    /// Of those, raised by rule 2's tighter bound ([`Support::supports_beside`]).
+    pub raised_beside: usize,
     /// Length proposed and length certified (all its pieces of at least [`MIN_PIECE_M`]), metres.
     pub proposed_m: f64,
     pub certified_m: f64,
@@ -108,6 +111,44 @@ impl<'a> Certifier<'a> {
             // Pieces shorter than MIN_PIECE_M are dropped anyway.
             .with_max_step(0.5 * MIN_PIECE_M)
         })
+    }
+
+    /// Whether VO `a`–`b` at `level` is certified hidden over the blockers that support it by
+    /// rule 2's tighter bound ([`Support::supports_beside`], with the segment's own distances),
+    /// in a verifier of its own. Only blockers meeting the box of the cell and the segment can
+    /// meet a segment between them; when the tighter bound admits none beyond the band's
+    /// (`band_set`), the band's verifier has already answered and the sweep is skipped.
+    fn hidden_beside(&self, level: u8, band: usize, a: DVec2, b: DVec2) -> bool {
+        let (e0, e1, g) = self.heights;
+        let h = self.frame.vo_top(e1, level);
+        let dn = d_near(self.cell, &[a, b]);
+        let (lo, hi) = self
+            .cell
+            .iter()
+            .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
+        let floor = band_floor(band).max(f64::MIN_POSITIVE);
+        let mut new = false;
+        let used: Vec<&[DVec2]> = self
+            .blockers
+            .iter()
+            .filter(|(p, _)| {
+                let (pl, ph) = p
+                    .iter()
+                    .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(l, u), v| {
+                        (l.min(*v), u.max(*v))
+                    });
+                pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y
+            })
+            .filter(|(p, s)| {
+                let ok = s.supports_beside(e0, e1, g, h, dn, d_near(p, &[a, b]));
+                new |= ok && !s.supports(e0, e1, g, h, floor);
+                ok
+            })
+            .map(|(p, _)| *p)
+            .collect();
+        new && Verifier::new(self.cell, used)
+            .with_max_step(0.5 * MIN_PIECE_M)
+            .is_hidden(a, b)
     }
 
     /// The band a segment belongs to, and the check that it does (rounding-safe: the band is
@@ -189,6 +230,19 @@ impl<'a> Certifier<'a> {
                         q.level += 1;
                         geom = f.dequantize(self.id, self.ground, &q)?;
                         stats.raised += 1;
+                    }
+                    // Then by rule 2's tighter bound, over the blockers that support this very
+                    // segment where they stand (a verifier of its own: its blockers hold for
+                    // this segment, not for its band).
+                    while q.level + 1 < HEIGHT_LEVELS {
+                        stats.checks += 1;
+                        if !self.hidden_beside(q.level + 1, band, qa, qb) {
+                            break;
+                        }
+                        q.level += 1;
+                        geom = f.dequantize(self.id, self.ground, &q)?;
+                        stats.raised += 1;
+                        stats.raised_beside += 1;
                     }
                     return Some(Certified {
                         q,

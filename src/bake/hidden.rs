@@ -36,7 +36,7 @@ impl Default for MapParams {
     fn default() -> Self {
         MapParams {
             edge_eyes: 3,
-            bins: 1024,
+            bins: 512,
             px: 4.0,
             half: 1024.0,
         }

@@ -42,8 +42,8 @@ pub struct ProposeParams {
 impl Default for ProposeParams {
     fn default() -> Self {
         ProposeParams {
-            directions: 32,
-            spacing: 16.0,
+            directions: 16,
+            spacing: 32.0,
             step: 2,
             max_offset: 900.0,
             min_len: 60.0,

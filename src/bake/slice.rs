@@ -11,6 +11,9 @@
 //!   with the smaller of the two ratios (proof in ARCHITECTURE.md, "Rules 2 and 3"); distances are computed in f64 and rounded
 //!   toward the conservative side (`d_far` up, `d_near` down, the bound up by
 //!   [`RULE2_SLACK_M`]), so a blocker admitted here supports the VO in exact arithmetic;
+//! - for one given VO segment `s`, [`Support::supports_beside`] also takes
+//!   `lambda <= d_far(B) / (d_far(B) + dist(B, s))` (ARCHITECTURE.md, "Rule 2, the tighter
+//!   bound"), never looser than the plain bound;
 //! - the *perspective-adjusted height* of a blocker, `e1 + (t - e1) max(1, d_near(B) / d_far(B))`, is the
 //!   VO top it supports for a VO as near as the blocker's nearest point. It only ranks blockers
 //!   for the slice histogram and picks the candidates of a slice; every VO is then checked
@@ -134,6 +137,32 @@ impl Support {
         self.top >= bound + RULE2_SLACK_M * (1.0 + bound.abs())
     }
 
+    /// Rule 2 with the tighter bound, for one VO: `lambda <= d_far(B) / (d_far(B) + dist(B, s))`
+    /// as well, where `d_bs` is the least distance between this blocker and the VO's segment
+    /// (rounded down; 0 when they may meet). The crossing `y` splits the ray's 2D segment from
+    /// eye `p` to VO point `x` into `|p - y| <= d_far(B)` and `|y - x| >= dist(B, s)`, and
+    /// `u / (u + v)` grows with `u` and falls with `v` (ARCHITECTURE.md, "Rule 2, the tighter
+    /// bound"). It holds for the VO it was computed for, not for every VO of a distance band.
+    pub fn supports_beside(
+        &self,
+        e0: f64,
+        e1: f64,
+        g: f64,
+        h: f64,
+        d_near_s: f64,
+        d_bs: f64,
+    ) -> bool {
+        if !(self.base <= e0.min(g)) || !(d_near_s > 0.0) || !(d_bs >= 0.0) {
+            return false;
+        }
+        let h = h.max(e1);
+        let lambda = (self.d_far / d_near_s)
+            .min(self.d_far / (self.d_far + d_bs))
+            .min(1.0);
+        let bound = e1 + (h - e1) * lambda;
+        self.top >= bound + RULE2_SLACK_M * (1.0 + bound.abs())
+    }
+
     /// The perspective-adjusted height: the VO top this blocker supports for a VO at its own
     /// nearest distance (0 when it cannot support one above the eyes).
     pub fn adjusted_height(&self, e1: f64) -> f64 {
@@ -236,6 +265,102 @@ mod tests {
         assert!((d_near(&cell, &w) - 3.0).abs() < 1e-9);
         // A polygon holding the whole cell: 0 (no vertex-edge pair says so).
         assert_eq!(d_near(&cell, &sq(-10.0, -10.0, 40.0)), 0.0);
+    }
+
+    #[test]
+    fn rule_2_tighter_bound() {
+        // The blocker of `rule_2_bound`, 10 to 30 m from the cell, and a VO 20 m from the cell
+        // but 15 m from the blocker (off to its side): lambda <= 30 / 45 instead of 1.
+        let s = Support {
+            base: 0.0,
+            top: 12.0,
+            d_far: 30.0,
+            d_near: 10.0,
+        };
+        // Bound: 2 + (h - 2) * 30 / 45 <= 12 <=> h <= 17.
+        assert!(s.supports_beside(1.5, 2.0, 0.0, 16.99, 20.0, 15.0));
+        assert!(!s.supports_beside(1.5, 2.0, 0.0, 17.01, 20.0, 15.0));
+        // Touching the VO it gives the plain rule; never less than the plain rule.
+        assert!(s.supports_beside(1.5, 2.0, 0.0, 11.99, 20.0, 0.0));
+        assert!(!s.supports_beside(1.5, 2.0, 0.0, 12.01, 20.0, 0.0));
+        assert!(s.supports_beside(1.5, 2.0, 0.0, 15.3, 40.0, 0.0));
+        let raised = Support { base: 0.5, ..s };
+        assert!(!raised.supports_beside(1.5, 2.0, 0.0, 3.0, 40.0, 15.0));
+    }
+
+    /// Rule 2's tighter bound against 3D rays: on random cells, blockers and VOs, whenever the
+    /// blocker supports the VO by [`Support::supports_beside`], every sampled ray from an eye to a
+    /// point of the VO passes, over each sampled point of its 2D segment inside the blocker,
+    /// between the blocker's base and top. The ray heights and the inside test are computed here
+    /// from the points alone.
+    #[test]
+    fn rule_2_tighter_bound_holds_for_3d_rays() {
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (e0, e1, g) = (1.5, 2.0, 0.0);
+        let cell = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(50.0, 0.0),
+            DVec2::new(50.0, 50.0),
+            DVec2::new(0.0, 50.0),
+        ];
+        let (mut supported, mut tighter_only, mut crossings) = (0, 0, 0);
+        for _ in 0..3000 {
+            // A square blocker in front of the cell, a VO beyond it.
+            let (bx, by, w) = (
+                60.0 + 80.0 * rnd(),
+                -60.0 + 170.0 * rnd(),
+                4.0 + 20.0 * rnd(),
+            );
+            let poly = [
+                DVec2::new(bx, by),
+                DVec2::new(bx + w, by),
+                DVec2::new(bx + w, by + w),
+                DVec2::new(bx, by + w),
+            ];
+            let a = DVec2::new(bx + w + 1.0 + 100.0 * rnd(), -100.0 + 250.0 * rnd());
+            let b = a + DVec2::new(-30.0 + 60.0 * rnd(), 20.0 + 150.0 * rnd());
+            let top = 3.0 + 30.0 * rnd();
+            let h = e1 + (top - e1) * (1.0 + 2.0 * rnd());
+            let sup = Support::new(&cell, &poly, g, top);
+            let dn = d_near(&cell, &[a, b]);
+            let dbs = d_near(&poly, &[a, b]);
+            if !sup.supports_beside(e0, e1, g, h, dn, dbs) {
+                continue;
+            }
+            supported += 1;
+            if !sup.supports(e0, e1, g, h, dn) {
+                tighter_only += 1;
+            }
+            for _ in 0..40 {
+                let p = DVec2::new(50.0 * rnd(), 50.0 * rnd());
+                let (e, t) = (e0 + (e1 - e0) * rnd(), rnd());
+                let x = a + (b - a) * t;
+                let z = g + (h - g) * rnd();
+                for k in 1..200 {
+                    let f = k as f64 / 200.0;
+                    let y = p + (x - p) * f;
+                    if y.x >= bx && y.x <= bx + w && y.y >= by && y.y <= by + w {
+                        crossings += 1;
+                        let zy = e + (z - e) * f;
+                        assert!(
+                            zy <= top + 1e-9 && zy >= g - 1e-9,
+                            "ray at {zy} over {y}: blocker {poly:?} top {top}, VO {a}-{b} top {h}"
+                        );
+                    }
+                }
+            }
+        }
+        // Many of them supported by the tighter bound alone.
+        assert!(
+            supported > 100 && tighter_only > 50 && crossings > 1000,
+            "{supported} {tighter_only} {crossings}"
+        );
     }
 
     #[test]

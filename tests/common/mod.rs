@@ -153,7 +153,7 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
             let hi = cell[2].max(a).max(b);
             // Rule 2 for a VO at least `dn` from the cell (`dn <= d_near` only raises the
             // bound, so these blockers support the VO too).
-            let used_for = |dn: f64| -> Vec<Vec<DVec2>> {
+            let used_for = |dn: f64, beside: bool| -> Vec<Vec<DVec2>> {
                 s.blockers
                     .iter()
                     .filter(|bl| {
@@ -170,7 +170,14 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
                             .iter()
                             .flat_map(|c| bl.polygon.iter().map(move |v| c.distance(*v)))
                             .fold(0.0, f64::max);
-                        let bound = view.e1 + (vo.h - view.e1) * (d_far / dn).min(1.0);
+                        // With `beside`, rule 2's tighter bound for this segment too:
+                        // lambda <= d_far / (d_far + dist(B, s)) (ARCHITECTURE.md).
+                        let beside = if beside {
+                            d_far / (d_far + poly_segment_distance(&bl.polygon, a, b))
+                        } else {
+                            1.0
+                        };
+                        let bound = view.e1 + (vo.h - view.e1) * (d_far / dn).min(beside).min(1.0);
                         bl.base <= view.e0.min(vo.g)
                             && bl.top >= bound
                             && convex_interiors_disjoint(&bl.polygon, &cell)
@@ -194,8 +201,11 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
             floors.push(f64::MIN_POSITIVE);
             // Each also within the bake's search distance of the cell (900 m per axis).
             let search = 900.0;
-            let certified = floors.iter().any(|&dn| {
-                let set = used_for(dn);
+            // The bake raises a stored VO by rule 2's tighter bound over the supporters of its
+            // own segment: that set is tried too.
+            let sets = floors.iter().map(|&dn| (dn, false)).chain([(d_near, true)]);
+            let certified = sets.into_iter().any(|(dn, beside)| {
+                let set = used_for(dn, beside);
                 [false, true].into_iter().any(|within| {
                     let refs: Vec<&[DVec2]> = set
                         .iter()
@@ -218,7 +228,7 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
                 "cell {id}: stored VO {q:?} ({a} - {b}, top {}) is not certified hidden",
                 vo.h
             );
-            let used = used_for(d_near);
+            let used = used_for(d_near, true);
             // The brute-force oracle, on points along the VO.
             for k in 0..=8 {
                 let p = a + (b - a) * (k as f64 / 8.0);
@@ -231,6 +241,45 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
         }
     }
     (cells_with_vos, checked)
+}
+
+/// Least distance between a convex polygon (or a 2-point wall) and the segment `a`-`b`, 0 when
+/// they meet (written here again, apart from the bake's own): for disjoint convex sets it is
+/// between a vertex of one and an edge of the other.
+fn poly_segment_distance(poly: &[DVec2], a: DVec2, b: DVec2) -> f64 {
+    let seg = |p: DVec2, u: DVec2, v: DVec2| {
+        let d = v - u;
+        let l2 = d.length_squared();
+        let t = if l2 > 0.0 {
+            ((p - u).dot(d) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        p.distance(u + d * t)
+    };
+    let n = if poly.len() == 2 { 1 } else { poly.len() };
+    let edges = || (0..n).map(|i| (poly[i], poly[(i + 1) % poly.len()]));
+    let cross = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let mut m = f64::INFINITY;
+    for (u, v) in edges() {
+        // Crossing (or touching) edges: distance 0.
+        let (d1, d2) = (cross(a, b, u), cross(a, b, v));
+        let (d3, d4) = (cross(u, v, a), cross(u, v, b));
+        if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 {
+            return 0.0;
+        }
+        m = m.min(seg(a, u, v)).min(seg(b, u, v));
+    }
+    for &p in poly {
+        m = m.min(seg(p, a, b));
+    }
+    // The segment inside the polygon (counter-clockwise): distance 0.
+    if poly.len() >= 3
+        && (0..poly.len()).all(|i| cross(poly[i], poly[(i + 1) % poly.len()], a) >= 0.0)
+    {
+        return 0.0;
+    }
+    m
 }
 
 /// Least distance between an axis-aligned rectangle and a segment that misses it (written here
