@@ -27,20 +27,22 @@ demo:
 	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/lyon.vocc
 	$(CARGO) run --locked --release -- inspect target/lyon.vocc
 
+# The benchmarks are the workspace member benches/ (package vocc-bench), so `cargo test` does not
+# build criterion; one of them: cargo bench -p vocc-bench --bench culler
 bench:
-	$(CARGO) bench --locked
+	$(CARGO) bench --locked -p vocc-bench
 
 # The bake at scale: generated cities of 10^4, 10^5 and 10^6 buildings, end to end, with peak
-# memory (about 10 minutes on 2 cores; `cargo bench --bench scale` alone runs 10^4 and 10^5).
+# memory (about 10 minutes on 2 cores; `cargo bench -p vocc-bench --bench scale` alone runs 10^4 and 10^5).
 scale:
-	VOCC_SCALE=10000,100000,1000000 $(CARGO) bench --locked --bench scale
+	VOCC_SCALE=10000,100000,1000000 $(CARGO) bench --locked -p vocc-bench --bench scale
 
 # Regenerates docs/RESULTS.md and docs/img/*.svg from the bundled data (several minutes).
 eval:
 	$(CARGO) run --locked --release -- results -o docs/RESULTS.md
 
 lint:
-	$(CARGO) clippy --all-targets -- -D warnings
+	$(CARGO) clippy --locked --all-targets -p vocc -p vocc-bench -- -D warnings
 
 # Clones the committed main into a temporary folder and runs the README's two commands there.
 fresh-clone:
@@ -49,7 +51,7 @@ fresh-clone:
 # Regenerates the pictures in docs/img: the paper's Fig. 3 configuration, a Lyon cell, and two
 # Lyon cells before (the growth generator) and after (the long generator), like the paper's Fig. 8.
 pictures:
-	$(CARGO) test --locked --test umbra_cases
+	$(CARGO) test --locked --test all umbra_cases::
 	cp target/tmp/umbra-cases/fig3_staggered.svg docs/img/
 	$(CARGO) run --locked --release -- render --debug $(DEMO_SCENE) --height-attr HAUTEUR \
 		--at 1842000,5176050 -o docs/img/lyon_cell_100m.svg
@@ -80,7 +82,7 @@ header:
 	VOCC_BLESS_HEADER=1 $(CARGO) test --locked -p vocc-capi --test header
 
 # The culler through the C ABI, µs per cell entry (docs/EMBEDDING.md), on the stores and boxes that
-# `cargo bench --bench culler` (the Rust figures) writes to target/tmp: run that first.
+# `cargo bench -p vocc-bench --bench culler` (the Rust figures) writes to target/tmp: run that first.
 c-bench:
 	$(CARGO) build --locked --release -p vocc-capi
 	mkdir -p target/tmp/c-bench

@@ -1,6 +1,6 @@
 //! The bake on Lyon (100 m cells, default options): ms per cell (median and p95) and the
 //! whole-scene time at 1 and 2 threads, with the speed-up and the store's size.
-//! `make bench` runs it (`cargo bench --bench bake`); it prints a table.
+//! `make bench` runs it (`cargo bench -p vocc-bench --bench bake`); it prints a table.
 //!
 //! The bake is the library job (`bake::job::BakeJob`, what `vocc bake` runs); the whole-bake time
 //! includes its content hashes and encoding. Per-cell times are wall-clock times of `Plan::bake_cell`, measured while the pool runs at the
@@ -24,7 +24,7 @@ fn pct(v: &[f64], p: f64) -> f64 {
 }
 
 fn main() {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
     let s = scene::load(
         &[root.join("data/lyon1/buildings_lyon1.geojson")],
         &ReadOptions {

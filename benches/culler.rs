@@ -1,6 +1,6 @@
 //! The runtime culler: µs per cell entry (decode the cell's record, then build its PVS over
 //! every object box), on Lyon (2,576 objects) and on a generated city of 100,000 buildings.
-//! `make bench` runs it (`cargo bench --bench culler`, criterion).
+//! `make bench` runs it (`cargo bench -p vocc-bench --bench culler`, criterion).
 //!
 //! Setup (not timed): load the scene, bake the store (Lyon: every 100 m cell; the generated
 //! city: the 25 m cells of the 400 m square at its centre, since the culler's cost depends on
@@ -79,7 +79,7 @@ fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, cell_size: f64, region:
 }
 
 fn culler(c: &mut Criterion) {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
     let lyon = scene::load(
         &[root.join("data/lyon1/buildings_lyon1.geojson")],
         &ReadOptions {

@@ -7,7 +7,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use vocc::scene::{self, gencity, ReadOptions};
 
 fn data(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).join(rel)
 }
 
 fn load(c: &mut Criterion) {

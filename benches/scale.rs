@@ -4,7 +4,7 @@
 //! The bake is the library job (`bake::job::BakeJob`, what `vocc bake` runs); the hashes it computes
 //! for incremental rebakes are timed apart (its own timing), and its CPU time includes them.
 //! Input: `VOCC_SCALE` (comma-separated building counts; default `10000,100000`), `VOCC_SEED`
-//! (default 1). `cargo bench --bench scale`; `make scale` runs 10^4 to 10^6.
+//! (default 1). `cargo bench -p vocc-bench --bench scale`; `make scale` runs 10^4 to 10^6.
 //! Output: one table row per size: cells, stage times, core-ms per cell (wall x threads), CPU ms
 //! per cell (what the process used: robust when other work shares the machine), peak memory,
 //! store size;
@@ -51,7 +51,7 @@ fn cpu_s() -> f64 {
 }
 
 fn child(buildings: usize, seed: u64) {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tmp/scale");
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).join("target/tmp/scale");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("city_{buildings}.geojson"));
     let t = Instant::now();
@@ -123,7 +123,7 @@ fn main() {
                 .expect("VOCC_SCALE: comma-separated counts")
         })
         .collect();
-    let log = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/scale.jsonl");
+    let log = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).join("target/scale.jsonl");
     println!("generated city, 100 m cells, seed {seed}; each size in its own process");
     println!(
         "{:>10} {:>9} {:>8} {:>7} {:>7} {:>9} {:>7} {:>13} {:>12} {:>10} {:>6} {:>9} {:>9}",

@@ -1,6 +1,6 @@
 //! The 2D core on Lyon: per-cell dense-set size, VO length, growth time (median and p95) and
 //! the verifier's rejection count, for 50, 100 and 200 m cells with one slice at mid height.
-//! `make bench` runs it (`cargo bench --bench umbra`); it prints a table.
+//! `make bench` runs it (`cargo bench -p vocc-bench --bench umbra`); it prints a table.
 //!
 //! Slice: the blockers cut by the plane at half the median building height
 //! (`vocc::bake::mid_slice`).
@@ -26,7 +26,8 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with("--"))
         .collect();
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/lyon1/buildings_lyon1.geojson");
+    let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .join("data/lyon1/buildings_lyon1.geojson");
     let opts = ReadOptions {
         height_attr: Some("HAUTEUR".into()),
         ..ReadOptions::default()
