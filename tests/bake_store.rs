@@ -3,7 +3,7 @@
 //! shares no code with it), from both generators; the bytes do not depend on the thread
 //! count.
 
-mod common;
+use crate::common;
 
 use common::{check_stored_vos, load_lyon};
 use vocc::bake::pipeline::{BakeParams, Generator};

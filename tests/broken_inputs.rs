@@ -1,7 +1,7 @@
 //! One test per broken file in `tests/fixtures/broken/` (GeoJSON and format detection): each
 //! gives a typed error naming the file and the place, and nothing panics.
 
-mod common;
+use crate::common;
 
 use common::repo;
 use vocc::scene::{self, LoadError, LoadErrorKind, Location, OnBadHeight, ReadOptions};

@@ -3,7 +3,7 @@
 //! ground-truth visible set (rays against the original prisms, no VO code) must lie inside it;
 //! and rays from eye points to every stored VO must meet the original geometry first.
 
-mod common;
+use crate::common;
 
 use common::load_lyon;
 use vocc::eval::metrics::{cell_vs, eval_cell, object_boxes, sample_cells, vo_rays};

@@ -1,7 +1,7 @@
 //! Footprints in, convex blockers out: Lyon end to end, random polygons with holes, and the
 //! local frame under large coordinate offsets.
 
-mod common;
+use crate::common;
 
 use common::*;
 use glam::DVec2;

@@ -11,7 +11,7 @@
 //! interrupted or failed write leaves the output path as it was (absent, or the old store) and no
 //! temporary file that parses as a store; a full disk is reported as such.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -566,8 +566,8 @@ fn polygons_of_100_000_vertices_load_or_are_refused_quickly() {
     star(100_000);
 }
 
-/// 10^6 vertices: about 28 MB of GeoJSON each. Run with `cargo test --release --test
-/// hostile_inputs -- --ignored`; figures in docs/FUZZING.md.
+/// 10^6 vertices: about 28 MB of GeoJSON each. Run with `cargo test --release --test all
+/// hostile_inputs:: -- --ignored`; figures in docs/FUZZING.md.
 #[test]
 #[ignore]
 fn polygons_of_1_000_000_vertices_load_or_are_refused_quickly() {

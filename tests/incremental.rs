@@ -7,7 +7,7 @@
 //! Invariants: reuse is exact (bytes equal); an edit rebakes some cells but not all; an unchanged
 //! scene rebakes none.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -16,7 +16,7 @@
 //! - each case has something to lose: the suite as a whole stores VOs and culls objects, so
 //!   "the same" is not "all empty".
 
-mod common;
+use crate::common;
 
 use std::fmt::Write as _;
 

@@ -6,7 +6,7 @@
 //! sanity bounds on a Lyon cell's VS.
 //! Invariant: nothing here calls the occlusion pipeline; the VS is built from the scene alone.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 
@@ -495,7 +495,7 @@ fn lyon_cell_visible_set_is_plausible_and_deterministic() {
 }
 
 /// Not run by default: convergence and ray speed on Lyon, single thread, for the report.
-/// `cargo test --release --test truth -- --ignored --nocapture`
+/// `cargo test --release --test all truth:: -- --ignored --nocapture`
 #[test]
 #[ignore]
 fn lyon_convergence_report() {

@@ -1,9 +1,9 @@
 //! The growth of aggregate umbrae on named configurations with literal coordinates (paper 002's
 //! figures and the hard cases), each also run at offsets of 10^6 and 10^7 m. Every VO must pass
 //! the exact verifier untouched (rejections 0) and the independent brute-force oracle.
-//! Pictures of each case go to `target/umbra-cases/` (`cargo test --test umbra_cases`).
+//! Pictures of each case go to `target/umbra-cases/` (`cargo test --test all umbra_cases::`).
 
-mod common;
+use crate::common;
 
 use common::{brute_hidden, dyadic_points};
 use glam::DVec2;

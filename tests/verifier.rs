@@ -1,7 +1,7 @@
 //! The exact hidden-interval verifier against an independent brute-force oracle: literal cases
 //! and property tests with fixed seeds on random scenes.
 
-mod common;
+use crate::common;
 
 use common::{brute_hidden, dyadic_points};
 use glam::DVec2;

@@ -14,7 +14,7 @@ mkdir -p "$out"
 $CARGO build --locked --profile test -p vocc-capi
 # The CLI and the box writer as `cargo test` builds them (its features, with the dev-dependencies
 # unified), so after `cargo test` nothing is compiled again.
-$CARGO test --locked --no-run --test cli --example boxes
+$CARGO test --locked --no-run --test all --example boxes
 lib=target/debug
 "$CC" -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Icapi/include examples/c/pvs.c \
   "$lib/libvocc.a" -lm -lpthread -ldl -o "$out/pvs"

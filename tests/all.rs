@@ -1,0 +1,60 @@
+//! The integration tests, one module per file of tests/, in one test binary: linking a binary
+//! against the whole library is a large part of a cold build, so there is one (`[[test]] all` in
+//! Cargo.toml, with `autotests = false`) instead of one per file. `tests/format.rs` stays a binary
+//! of its own: it installs a counting global allocator and builds without default features.
+//! `every_test_file_runs` fails when a file of tests/ is neither a module here nor a `[[test]]`.
+//! One file's tests: `cargo test --test all incremental::`.
+
+mod common;
+
+mod bake_store;
+mod broken_inputs;
+mod broken_mesh_inputs;
+mod cli;
+mod eval;
+mod footprints;
+mod fuzz_corpus;
+mod hostile_inputs;
+mod incremental;
+mod mesh_datasets;
+mod stability;
+mod truth;
+mod umbra_cases;
+mod verifier;
+mod walls;
+
+/// Every `tests/*.rs` is a `mod` of this file or a `[[test]]` target of its own in Cargo.toml, so
+/// a new test file cannot be silently left out of `cargo test` (autotests is off).
+#[test]
+fn every_test_file_runs() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let this = include_str!("all.rs");
+    let manifest = std::fs::read_to_string(root.join("Cargo.toml")).unwrap();
+    let mut files = 0;
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(root.join("tests")).unwrap() {
+        let path = entry.unwrap().path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        let Some(stem) = name.strip_suffix(".rs") else {
+            continue;
+        };
+        if stem == "all" {
+            continue;
+        }
+        files += 1;
+        let as_module = this.lines().any(|l| l == format!("mod {stem};"));
+        let as_target = manifest
+            .lines()
+            .any(|l| l.trim() == format!("path = \"tests/{name}\""));
+        if !as_module && !as_target {
+            missing.push(name.to_string());
+        }
+    }
+    assert!(files >= 16, "only {files} test files found in tests/");
+    assert!(
+        missing.is_empty(),
+        "tests/{missing:?} would not run: add `mod NAME;` to tests/all.rs (or a [[test]] to Cargo.toml)"
+    );
+}
