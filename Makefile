@@ -3,7 +3,7 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test demo bench scale eval lint fresh-clone pictures fuzz header c-bench c-size
+.PHONY: build test test-long demo bench scale eval lint fresh-clone pictures fuzz header c-bench c-size
 
 build:
 	$(CARGO) build --release
@@ -21,6 +21,12 @@ test:
 	CARGO="$(CARGO)" examples/c/test.sh
 	CARGO="$(CARGO)" python/test.sh
 	$(CARGO) fmt --all -- --check
+
+# The long versions of checks that `make test` runs on fewer cells: the incremental rebake tests
+# over every cell of Lyon and of a generated city (`make test` bakes one band of cells across
+# each scene). About 5 minutes on 2 cores once built.
+test-long:
+	$(CARGO) test --locked --test all incremental:: -- --ignored
 
 # The main job on the bundled example: bake Lyon into an occluder store, then describe it.
 demo:

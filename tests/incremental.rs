@@ -3,9 +3,15 @@
 //! bake of the edited scene; and the CLI's `bake --reuse` does the same from files.
 //!
 //! Input: Lyon's footprints, edited as GeoJSON (a building deleted mid-file, so every later
-//! index shifts, and one appended); a generated city with one building moved 2 m, for the CLI. Output: the counts of rebaked cells, printed (the figures of the note).
+//! index shifts, and one appended); a generated city with one building 1.5 m higher, for the CLI.
+//! Output: the counts of rebaked cells, printed (the figures of the issue's note).
 //! Invariants: reuse is exact (bytes equal); an edit rebakes some cells but not all; an unchanged
 //! scene rebakes none.
+//!
+//! `make test` checks each property on a band of cells across the scene, west to east (the
+//! middle row of cells, or the rows meeting a strip for the CLI), each bake a band's; the same
+//! tests over every cell (several whole bakes of Lyon, minutes on 2 cores) are ignored here and run
+//! by `make test-long` (`cargo test --test all incremental:: -- --ignored`).
 
 use crate::common;
 
@@ -17,6 +23,7 @@ use vocc::bake::incremental::hashes_path;
 use vocc::bake::job::BakeJob;
 use vocc::bake::pipeline::{BakeParams, Effort};
 use vocc::runtime::format::Store;
+use vocc::runtime::grid::CellId;
 use vocc::scene::{self, Scene};
 
 fn load(json: &Value, name: &str) -> Scene {
@@ -58,10 +65,37 @@ fn shift(v: &mut Value, dx: f64) {
     }
 }
 
+/// Which cells the library bakes: every cell, or the middle row of the grid (west to east).
+#[derive(Clone, Copy)]
+enum Cells {
+    All,
+    MiddleRow,
+}
+
+/// The bake job of `scene` over `cells`.
+fn job(scene: &Scene, cells: Cells) -> BakeJob<'_> {
+    let job = BakeJob::new(scene, params()).unwrap();
+    match cells {
+        Cells::All => job,
+        Cells::MiddleRow => {
+            let g = job.plan().frame.grid;
+            let row = (g.ny / 2) as CellId;
+            let nx = g.nx as CellId;
+            let ids: Vec<CellId> = (row * nx..(row + 1) * nx).collect();
+            job.cells(&ids).unwrap()
+        }
+    }
+}
+
 /// (cells rebaked, cells baked) for `new` given the bake of `old` (the library job with the old
-/// store's bytes and hashes), and checks the bytes equal a full bake of `new`.
-fn rebake(old_out: &vocc::bake::job::BakeOutput, new: &Scene, what: &str) -> (usize, usize) {
-    let job = BakeJob::new(new, params()).unwrap();
+/// store's bytes and hashes), and checks the bytes equal a full bake of `new` (over the same cells).
+fn rebake(
+    old_out: &vocc::bake::job::BakeOutput,
+    new: &Scene,
+    cells: Cells,
+    what: &str,
+) -> (usize, usize) {
+    let job = job(new, cells);
     assert_eq!(
         &job.plan().frame,
         Store::parse(&old_out.store).unwrap().frame(),
@@ -71,7 +105,7 @@ fn rebake(old_out: &vocc::bake::job::BakeOutput, new: &Scene, what: &str) -> (us
         .reuse(old_out.store.clone(), Some(old_out.hashes.clone()))
         .run(&|_| {})
         .unwrap();
-    let full = BakeJob::new(new, params()).unwrap().run(&|_| {}).unwrap();
+    let full = self::job(new, cells).run(&|_| {}).unwrap();
     assert!(
         inc.store == full.store,
         "{what}: the incremental store differs from a full bake"
@@ -86,15 +120,25 @@ fn rebake(old_out: &vocc::bake::job::BakeOutput, new: &Scene, what: &str) -> (us
 
 #[test]
 fn one_building_edits_of_lyon_rebake_a_neighbourhood_and_match_a_full_bake() {
+    lyon_edits(Cells::MiddleRow, "row");
+}
+
+/// The same over every cell of Lyon (about 100 s on 2 cores): `make test-long`.
+#[test]
+#[ignore]
+fn one_building_edits_of_lyon_rebake_a_neighbourhood_and_match_a_full_bake_on_every_cell() {
+    lyon_edits(Cells::All, "all");
+}
+
+fn lyon_edits(cells: Cells, name: &str) {
     let json: Value =
         serde_json::from_slice(&std::fs::read(repo(LYON)).unwrap()).expect("Lyon is JSON");
-    let old = load(&json, "old");
+    let old = load(&json, &format!("old-{name}"));
     let k = western_feature(&json);
 
     // An unchanged scene rebakes nothing: the job reuses every cell of its own bake.
-    let first = BakeJob::new(&old, params()).unwrap().run(&|_| {}).unwrap();
-    let again = BakeJob::new(&old, params())
-        .unwrap()
+    let first = job(&old, cells).run(&|_| {}).unwrap();
+    let again = job(&old, cells)
         .reuse(first.store.clone(), Some(first.hashes.clone()))
         .run(&|_| {})
         .unwrap();
@@ -114,10 +158,15 @@ fn one_building_edits_of_lyon_rebake_a_neighbourhood_and_match_a_full_bake() {
     shift(&mut extra["geometry"]["coordinates"], 30.0);
     f.remove(k);
     f.push(extra);
-    let (n_edited, total) = rebake(&first, &load(&edited, "edited"), "deleted and appended");
+    let (n_edited, total) = rebake(
+        &first,
+        &load(&edited, &format!("edited-{name}")),
+        cells,
+        "deleted and appended",
+    );
 
     println!(
-        "Lyon, 100 m cells: deleting one building and adding one 30 m away rebakes {n_edited} of {total} cells"
+        "Lyon, 100 m cells ({name}): deleting one building and adding one 30 m away rebakes {n_edited} of {total} cells"
     );
     assert!(
         0 < n_edited && n_edited < total,
@@ -140,7 +189,49 @@ fn vocc(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn bake_reuse_from_the_cli_matches_a_full_bake_and_refuses_stale_hashes() {
-    let d = temp_dir("incremental-cli");
+    cli_reuse(true);
+}
+
+/// The same over every cell of the generated city (about 2 minutes on 2 cores): `make test-long`.
+#[test]
+#[ignore]
+fn bake_reuse_from_the_cli_matches_a_full_bake_and_refuses_stale_hashes_on_every_cell() {
+    cli_reuse(false);
+}
+
+/// The world rectangle of a strip 100 m high across the middle of a GeoJSON scene, west to east,
+/// as `--region` takes it.
+fn middle_strip(json: &Value) -> String {
+    fn walk(v: &Value, b: &mut [f64; 4]) {
+        match v {
+            Value::Array(a) if a.first().is_some_and(Value::is_number) => {
+                let (x, y) = (a[0].as_f64().unwrap(), a[1].as_f64().unwrap());
+                *b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
+            }
+            Value::Array(a) => a.iter().for_each(|x| walk(x, b)),
+            _ => {}
+        }
+    }
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for f in json["features"].as_array().unwrap() {
+        walk(&f["geometry"]["coordinates"], &mut b);
+    }
+    let y = (b[1] + b[3]) / 2.0;
+    format!("{},{},{},{}", b[0], y - 50.0, b[2], y + 50.0)
+}
+
+/// `strip`: every bake covers the cells meeting `middle_strip` only.
+fn cli_reuse(strip: bool) {
+    let d = temp_dir(if strip {
+        "incremental-cli"
+    } else {
+        "incremental-cli-all"
+    });
     let p = |n: &str| d.join(n).to_str().unwrap().to_string();
     vocc(&[
         "gen-city",
@@ -159,6 +250,12 @@ fn bake_reuse_from_the_cli_matches_a_full_bake_and_refuses_stale_hashes() {
         .unwrap();
     json["features"][k]["properties"]["height"] = Value::from(h + 1.5);
     std::fs::write(p("b.geojson"), serde_json::to_vec(&json).unwrap()).unwrap();
+    let region = middle_strip(&json);
+    let region: Vec<&str> = if strip {
+        vec!["--region", &region]
+    } else {
+        vec![]
+    };
     let bake = |scene: &str, out: &str, reuse: Option<&str>| {
         let mut args = vec![
             "bake",
@@ -170,6 +267,7 @@ fn bake_reuse_from_the_cli_matches_a_full_bake_and_refuses_stale_hashes() {
             "-o",
             out,
         ];
+        args.extend(&region);
         if let Some(r) = reuse {
             args.extend(["--reuse", r]);
         }
@@ -199,16 +297,19 @@ fn bake_reuse_from_the_cli_matches_a_full_bake_and_refuses_stale_hashes() {
     Store::parse(&full).unwrap();
 
     // Hashes beside another store than their own are not trusted: every cell is baked.
-    vocc(&[
+    let (scene_b, x) = (p("b.geojson"), p("x.vocc"));
+    let mut args = vec![
         "bake",
-        &p("b.geojson"),
+        &scene_b,
         "--height-attr",
         "height",
         "--cell-size",
         "90",
         "-o",
-        &p("x.vocc"),
-    ]);
+        &x,
+    ];
+    args.extend(&region);
+    vocc(&args);
     assert_ne!(
         std::fs::read(p("x.vocc")).unwrap(),
         std::fs::read(p("a.vocc")).unwrap()
