@@ -359,6 +359,9 @@ fn four_shards_in_four_processes_merge_into_the_single_bake() {
             "50".into(),
             "-o".into(),
             p(out),
+            // Shards merge into the single bake at any effort: the fast one, for time.
+            "--effort".into(),
+            "fast".into(),
         ]
     };
     let single = dir.join("single.vocc");

@@ -305,6 +305,8 @@ fn cli_reuse(strip: bool) {
         "height",
         "--cell-size",
         "90",
+        "--effort",
+        "fast",
         "-o",
         &x,
     ];
