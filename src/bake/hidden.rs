@@ -374,31 +374,94 @@ fn seg_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
 /// counter-clockwise, except an edge whose reverse is an edge of another polygon of the set (the
 /// inside of a footprint split into pieces). A 2-vertex blocker (a wall) gives both directions,
 /// always: a wall is thin, so its two faces cancel nothing (not even each other).
+/// Edges come in the order of `polys`, the walls' last. [`EdgeTwins`] gives the same edges for
+/// subsets of one blocker list without sorting them each time.
 pub fn boundary_edges<'a>(polys: impl Iterator<Item = &'a [DVec2]>) -> Vec<(DVec2, DVec2)> {
-    let mut edges: Vec<(DVec2, DVec2)> = Vec::new();
-    let mut walls: Vec<(DVec2, DVec2)> = Vec::new();
-    for p in polys {
-        match p.len() {
-            0 | 1 => {}
-            2 => {
-                walls.push((p[0], p[1]));
-                walls.push((p[1], p[0]));
+    let polys: Vec<&[DVec2]> = polys.collect();
+    let ids: Vec<u32> = (0..polys.len() as u32).collect();
+    EdgeTwins::new(&polys).boundary_edges(&polys, &ids)
+}
+
+/// For every edge of every polygon of one blocker list (3 or more vertices; walls have no
+/// entry), the polygons of the list that hold its reverse: the edge is inside a set of these
+/// blockers exactly when one of them is in the set. Built once per bake, so that a cell's
+/// slices take their [`boundary_edges`] by lookups, not by sorting every edge.
+pub struct EdgeTwins {
+    /// Per blocker, the index of its first edge in `twin_start` (one past the last: the next
+    /// blocker's).
+    first_edge: Vec<u32>,
+    /// Per edge, where its twins start in `twins` (one past the last: the next edge's).
+    twin_start: Vec<u32>,
+    twins: Vec<u32>,
+}
+
+impl EdgeTwins {
+    pub fn new<P: AsRef<[DVec2]>>(polys: &[P]) -> EdgeTwins {
+        let key = |u: DVec2, v: DVec2| (u.x.to_bits(), u.y.to_bits(), v.x.to_bits(), v.y.to_bits());
+        fn edges(p: &[DVec2]) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+            let n = if p.len() >= 3 { p.len() } else { 0 };
+            (0..n).map(move |i| (p[i], p[(i + 1) % n]))
+        }
+        let mut keys: Vec<((u64, u64, u64, u64), u32)> = Vec::new();
+        for (i, p) in polys.iter().enumerate() {
+            keys.extend(edges(p.as_ref()).map(|(u, v)| (key(u, v), i as u32)));
+        }
+        keys.sort_unstable();
+        let mut first_edge = Vec::with_capacity(polys.len() + 1);
+        let mut twin_start = vec![0u32];
+        let mut twins = Vec::new();
+        for p in polys {
+            first_edge.push(twin_start.len() as u32 - 1);
+            for (u, v) in edges(p.as_ref()) {
+                let k = key(v, u);
+                let at = keys.partition_point(|x| x.0 < k);
+                twins.extend(keys[at..].iter().take_while(|x| x.0 == k).map(|x| x.1));
+                twin_start.push(twins.len() as u32);
             }
-            n => {
-                for i in 0..n {
-                    edges.push((p[i], p[(i + 1) % n]));
+        }
+        first_edge.push(twin_start.len() as u32 - 1);
+        EdgeTwins {
+            first_edge,
+            twin_start,
+            twins,
+        }
+    }
+
+    /// [`boundary_edges`] of the blockers `ids` (ascending indices into `polys`, the list this
+    /// was built from).
+    pub fn boundary_edges<P: AsRef<[DVec2]>>(
+        &self,
+        polys: &[P],
+        ids: &[u32],
+    ) -> Vec<(DVec2, DVec2)> {
+        debug_assert!(ids.windows(2).all(|w| w[0] < w[1]));
+        let mut out: Vec<(DVec2, DVec2)> = Vec::new();
+        let mut walls: Vec<(DVec2, DVec2)> = Vec::new();
+        for &i in ids {
+            let p = polys[i as usize].as_ref();
+            match p.len() {
+                0 | 1 => {}
+                2 => {
+                    walls.push((p[0], p[1]));
+                    walls.push((p[1], p[0]));
+                }
+                n => {
+                    let e0 = self.first_edge[i as usize] as usize;
+                    for k in 0..n {
+                        let (t0, t1) = (self.twin_start[e0 + k], self.twin_start[e0 + k + 1]);
+                        let inside = self.twins[t0 as usize..t1 as usize]
+                            .iter()
+                            .any(|t| ids.binary_search(t).is_ok());
+                        if !inside {
+                            out.push((p[k], p[(k + 1) % n]));
+                        }
+                    }
                 }
             }
         }
+        out.extend(walls);
+        out
     }
-    let key = |u: DVec2, v: DVec2| (u.x.to_bits(), u.y.to_bits(), v.x.to_bits(), v.y.to_bits());
-    let mut keys: Vec<(u64, u64, u64, u64)> = edges.iter().map(|&(u, v)| key(u, v)).collect();
-    keys.sort_unstable();
-    edges
-        .into_iter()
-        .filter(|&(u, v)| keys.binary_search(&key(v, u)).is_err())
-        .chain(walls)
-        .collect()
 }
 
 #[cfg(test)]
@@ -449,6 +512,65 @@ mod tests {
         assert!(!map.hidden(DVec2::new(50.0, 120.0)), "in front of the row");
         assert!(!map.hidden(DVec2::new(500.0, 200.0)), "beyond its end");
         assert!(!map.hidden(DVec2::new(50.0, -200.0)), "the other side");
+    }
+
+    /// The sorting form [`EdgeTwins`] replaced, kept as its oracle.
+    fn boundary_edges_by_sorting(polys: &[&[DVec2]]) -> Vec<(DVec2, DVec2)> {
+        let mut edges: Vec<(DVec2, DVec2)> = Vec::new();
+        let mut walls: Vec<(DVec2, DVec2)> = Vec::new();
+        for p in polys {
+            match p.len() {
+                0 | 1 => {}
+                2 => {
+                    walls.push((p[0], p[1]));
+                    walls.push((p[1], p[0]));
+                }
+                n => edges.extend((0..n).map(|i| (p[i], p[(i + 1) % n]))),
+            }
+        }
+        let key = |u: DVec2, v: DVec2| (u.x.to_bits(), u.y.to_bits(), v.x.to_bits(), v.y.to_bits());
+        let mut keys: Vec<_> = edges.iter().map(|&(u, v)| key(u, v)).collect();
+        keys.sort_unstable();
+        edges
+            .into_iter()
+            .filter(|&(u, v)| keys.binary_search(&key(v, u)).is_err())
+            .chain(walls)
+            .collect()
+    }
+
+    #[test]
+    fn edge_twins_give_the_edges_sorting_gives_for_every_subset() {
+        // A grid of unit squares (every inner edge shared), walls along some of their edges, a
+        // duplicated square: every subset drawn gives the sorting form's edges, in its order.
+        let mut polys: Vec<Vec<DVec2>> = Vec::new();
+        for x in 0..5 {
+            for y in 0..4 {
+                polys.push(sq(x as f64, y as f64, 1.0));
+            }
+        }
+        polys.push(sq(2.0, 2.0, 1.0));
+        polys.push(vec![DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0)]);
+        polys.push(vec![DVec2::new(3.0, 3.0), DVec2::new(4.0, 3.0)]);
+        let twins = EdgeTwins::new(&polys);
+        let mut seed = 7u64;
+        for _ in 0..300 {
+            let ids: Vec<u32> = (0..polys.len() as u32)
+                .filter(|_| {
+                    seed = seed
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    seed >> 62 != 0
+                })
+                .collect();
+            let sub: Vec<&[DVec2]> = ids.iter().map(|&i| polys[i as usize].as_slice()).collect();
+            assert_eq!(
+                twins.boundary_edges(&polys, &ids),
+                boundary_edges_by_sorting(&sub)
+            );
+        }
+        // All of them: the outline of the 5 x 4 block and the walls' 4 directions.
+        let all: Vec<u32> = (0..polys.len() as u32).collect();
+        assert_eq!(twins.boundary_edges(&polys, &all).len(), 2 * (5 + 4) + 4);
     }
 
     #[test]

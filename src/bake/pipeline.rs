@@ -239,6 +239,8 @@ pub struct Plan<'s> {
     pub params: BakeParams,
     pub frame: Frame,
     set: BlockerSet,
+    /// The blockers' shared edges, for each slice's boundary edges.
+    twins: super::hidden::EdgeTwins,
     base: Vec<f64>,
     top: Vec<f64>,
     pub occludees: Occludees,
@@ -326,6 +328,7 @@ impl<'s> Plan<'s> {
         Ok(Plan {
             scene,
             frame,
+            twins: super::hidden::EdgeTwins::new(&set.polys),
             set,
             base,
             top,
@@ -638,12 +641,13 @@ impl<'s> Plan<'s> {
         let mut all_props: Vec<(u8, DVec2, DVec2)> = Vec::new();
         for &k in &stats.levels.clone() {
             let h = levels[k as usize];
-            let polys = near
+            let ids: Vec<u32> = near
                 .iter()
                 .zip(support)
                 .filter(|(_, s)| s.top >= h)
-                .map(|(&i, _)| self.set.polys[i as usize].as_slice());
-            let edges = super::hidden::boundary_edges(polys);
+                .map(|(&i, _)| i)
+                .collect();
+            let edges = self.twins.boundary_edges(&self.set.polys, &ids);
             let map = super::hidden::HiddenMap::build(cell, &edges, &self.params.map);
             stats.stage_ms[0] += clock(&mut t);
             let props = super::propose::runs(cell, &map, &self.params.propose);
