@@ -206,11 +206,13 @@ fn conditions(links: &[Link], cell: &[DVec2]) -> Vec<Cond> {
 }
 
 /// The blockers near one stretch of the swept segment, `span` in parameters.
-struct NearCache {
+struct NearCache<'a> {
     span: (u64, u64),
     /// How far past a requested piece a new stretch reaches, in parameter steps.
     ahead: u64,
     ids: Vec<u32>,
+    /// The blockers of `ids`, in the same order.
+    polys: Vec<&'a [DVec2]>,
 }
 
 /// How far ahead of the sweep the blockers near the segment are gathered at once, metres.
@@ -550,7 +552,13 @@ impl<'a> Verifier<'a> {
 
     /// [`Self::near`] of the piece `[j, k]`, from the cache when it covers the piece; otherwise
     /// computed for the piece and [`NEAR_AHEAD_M`] beyond, and cached.
-    fn near_cached<'c>(&self, par: &Param, j: u64, k: u64, cache: &'c mut NearCache) -> &'c [u32] {
+    fn near_cached<'c>(
+        &self,
+        par: &Param,
+        j: u64,
+        k: u64,
+        cache: &'c mut NearCache<'a>,
+    ) -> (&'c [u32], &'c [&'a [DVec2]]) {
         if !(cache.span.0 <= j && k <= cache.span.1) {
             let end = k.max(j.saturating_add(cache.ahead)).min(END);
             let (e, pe) = par
@@ -567,10 +575,14 @@ impl<'a> Verifier<'a> {
             keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             ids.clear();
             ids.extend(keyed.into_iter().map(|x| x.1));
+            cache.polys.clear();
+            cache
+                .polys
+                .extend(ids.iter().map(|&i| self.blockers[i as usize]));
             cache.ids = ids;
             cache.span = (j, e.max(k));
         }
-        &cache.ids
+        (&cache.ids, &cache.polys)
     }
 
     /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
@@ -601,6 +613,7 @@ impl<'a> Verifier<'a> {
             span: (1, 0),
             ahead: steps(NEAR_AHEAD_M),
             ids: Vec::new(),
+            polys: Vec::new(),
         };
         // The last point that could not be certified, after which the sweep stepped on.
         let mut failed: Option<u64> = None;
@@ -678,7 +691,7 @@ impl<'a> Verifier<'a> {
         par: &Param,
         (j, q): (u64, DVec2),
         probe: u64,
-        cache: &mut NearCache,
+        cache: &mut NearCache<'a>,
     ) -> Option<(u64, DVec2)> {
         // The probe point: the next exact point at least `probe` on (further when exact points
         // are sparse, far from the origin).
@@ -703,7 +716,7 @@ impl<'a> Verifier<'a> {
         par: &Param,
         (j, q): (u64, DVec2),
         (k, p): (u64, DVec2),
-        cache: &mut NearCache,
+        cache: &mut NearCache<'a>,
     ) -> Option<(u64, DVec2)> {
         // A certificate found before that holds here (it proves the piece as well as a new one).
         let remaining = q.distance(par.b);
@@ -727,7 +740,7 @@ impl<'a> Verifier<'a> {
         let (conds, fresh) = match cached {
             Some((c, _)) => (c, false),
             None => {
-                let ids = self.near_cached(par, j, k, cache);
+                let (ids, near) = self.near_cached(par, j, k, cache);
                 // Inside one blocker: the piece up to where the segment leaves it.
                 let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
                 let in_box = |i: u32, x: DVec2| {
@@ -770,8 +783,6 @@ impl<'a> Verifier<'a> {
                         exact_midpoint(q, p).unwrap_or(q)
                     };
                     let pts = [anchor, q, p];
-                    let near: Vec<&[DVec2]> =
-                        ids.iter().map(|&i| self.blockers[i as usize]).collect();
                     let valid = |links: &[Link]| {
                         let conds = conditions(links, self.cell);
                         let holds = |x: DVec2| conds.iter().all(|c| c.holds(x));
@@ -949,20 +960,24 @@ impl<'a> Verifier<'a> {
                     // Chords from the extreme vertices seen from each test point: near an
                     // umbra boundary, nearly collinear vertices trade places within
                     // millimetres.
-                    let mut ls = vec![b[l]];
-                    let mut rs = vec![b[r]];
+                    // (At most one per test point, in a fixed array: this runs for every
+                    // blocker read.)
+                    let (mut ls, mut nl) = ([b[l]; 3], 1);
+                    let (mut rs, mut nr) = ([b[r]; 3], 1);
                     for &p in &pts[1..(if multi { 3 } else { 1 })] {
                         if let Some((l, r)) = guess_tangents(p, b) {
-                            if !ls.contains(&b[l]) {
-                                ls.push(b[l]);
+                            if !ls[..nl].contains(&b[l]) {
+                                ls[nl] = b[l];
+                                nl += 1;
                             }
-                            if !rs.contains(&b[r]) {
-                                rs.push(b[r]);
+                            if !rs[..nr].contains(&b[r]) {
+                                rs[nr] = b[r];
+                                nr += 1;
                             }
                         }
                     }
-                    for &l in &ls {
-                        for &r in &rs {
+                    for &l in &ls[..nl] {
+                        for &r in &rs[..nr] {
                             // Where the piece leaves this blocker, its chord is not seen
                             // from the start inside it ("Leaving a blocker").
                             let seen = |x: DVec2| {
