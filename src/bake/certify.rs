@@ -146,11 +146,8 @@ impl<'a> Certifier<'a> {
             })
             .map(|(p, _)| *p)
             .collect();
-        // The band's verifier at this level holds blockers that support every VO of the band,
-        // this one included: its certificates seed this sweep.
         new && Verifier::new(self.cell, used)
             .with_max_step(0.5 * MIN_PIECE_M)
-            .with_seed(self.verifier(level, band))
             .is_hidden(a, b)
     }
 

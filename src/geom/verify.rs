@@ -333,8 +333,6 @@ pub struct Verifier<'a> {
     cache: std::cell::RefCell<CertCache>,
     /// Longest step past points the sweep cannot certify, metres ([`MAX_STEP_M`]).
     max_step_m: f64,
-    /// Another verifier whose certificates are tried too ([`Self::with_seed`]).
-    seed: Option<&'a Verifier<'a>>,
 }
 
 /// Certificates (their conditions) by where they held: each is listed in the buckets of the
@@ -489,7 +487,6 @@ impl<'a> Verifier<'a> {
             grid,
             cache: Default::default(),
             max_step_m: MAX_STEP_M,
-            seed: None,
         }
     }
 
@@ -497,19 +494,6 @@ impl<'a> Verifier<'a> {
     /// miss hidden parts shorter than `m` between visible ones: it certifies less, never more).
     pub fn with_max_step(mut self, m: f64) -> Self {
         self.max_step_m = m.max(MIN_PIECE_M);
-        self
-    }
-
-    /// This verifier, trying also the certificates `seed` has found (read only), as it tries its
-    /// own. The caller vouches that the seed's blockers may be used for every segment this one
-    /// is asked about, as this verifier's own blockers are (for the bake: they support those
-    /// segments by rule 2), and that the seed's cell is this one's. A seed's certificate is a
-    /// chain of the seed's blockers and is checked exactly at every point like any cached one
-    /// (Lemma 1 uses only the chain's own blockers), so a seed saves searching and certifies
-    /// nothing that the union of both blocker sets does not hide.
-    pub fn with_seed(mut self, seed: &'a Verifier<'a>) -> Self {
-        debug_assert!(std::ptr::eq(seed.cell, self.cell) || seed.cell == self.cell);
-        self.seed = Some(seed);
         self
     }
 
@@ -725,16 +709,6 @@ impl<'a> Verifier<'a> {
             .borrow()
             .find(q, p, par.b)
             .map(|(c, t)| (c.to_vec(), t));
-        // The seed's, where it reaches further.
-        let cached = match self.seed.and_then(|s| {
-            s.cache
-                .borrow()
-                .find(q, p, par.b)
-                .map(|(c, t)| (c.to_vec(), t))
-        }) {
-            Some(s) if cached.as_ref().is_none_or(|c| s.1 > c.1) => Some(s),
-            _ => cached,
-        };
         // A cached certificate that reaches only a little way: a new one may reach further.
         let cached = cached.filter(|(_, t)| t * remaining >= CACHE_ENOUGH_M);
         let (conds, fresh) = match cached {
