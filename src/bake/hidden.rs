@@ -1,8 +1,8 @@
 //! Sampled from-region visibility: which points around a cell are hidden from it, as a raster.
 //!
 //! Input: a cell (convex, counter-clockwise rectangle), the blocker edges of one slice (2D
-//! segments, each facing outwards from its blocker), and a [`MapParams`] (eyes on the cell's
-//! boundary, angular bins, pixel size, window).
+//! segments, each facing outwards from its blocker, from [`EdgeTwins::boundary_edges`]), and a
+//! [`MapParams`] (eyes on the cell's boundary, angular bins, pixel size, window).
 //! Output: a [`HiddenMap`]: a square raster around the cell centre whose pixels are marked
 //! *visible* when some sampled ray from some eye reaches them before meeting an edge; the others
 //! count as hidden.
@@ -370,22 +370,10 @@ fn seg_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     p.distance(a + d * t)
 }
 
-/// The outward-facing boundary edges of a set of blockers: every edge of every convex polygon,
-/// counter-clockwise, except an edge whose reverse is an edge of another polygon of the set (the
-/// inside of a footprint split into pieces). A 2-vertex blocker (a wall) gives both directions,
-/// always: a wall is thin, so its two faces cancel nothing (not even each other).
-/// Edges come in the order of `polys`, the walls' last. [`EdgeTwins`] gives the same edges for
-/// subsets of one blocker list without sorting them each time.
-pub fn boundary_edges<'a>(polys: impl Iterator<Item = &'a [DVec2]>) -> Vec<(DVec2, DVec2)> {
-    let polys: Vec<&[DVec2]> = polys.collect();
-    let ids: Vec<u32> = (0..polys.len() as u32).collect();
-    EdgeTwins::new(&polys).boundary_edges(&polys, &ids)
-}
-
 /// For every edge of every polygon of one blocker list (3 or more vertices; walls have no
 /// entry), the polygons of the list that hold its reverse: the edge is inside a set of these
 /// blockers exactly when one of them is in the set. Built once per bake, so that a cell's
-/// slices take their [`boundary_edges`] by lookups, not by sorting every edge.
+/// slices take their [`EdgeTwins::boundary_edges`] by lookups, not by sorting every edge.
 pub struct EdgeTwins {
     /// Per blocker, the index of its first edge in `twin_start` (one past the last: the next
     /// blocker's).
@@ -427,8 +415,12 @@ impl EdgeTwins {
         }
     }
 
-    /// [`boundary_edges`] of the blockers `ids` (ascending indices into `polys`, the list this
-    /// was built from).
+    /// The outward-facing boundary edges of the blockers `ids` (ascending indices into `polys`,
+    /// the list this was built from): every edge of every convex polygon, counter-clockwise,
+    /// except an edge whose reverse is an edge of another polygon of the set (the inside of a
+    /// footprint split into pieces). A 2-vertex blocker (a wall) gives both directions, always:
+    /// a wall is thin, so its two faces cancel nothing (not even each other). Edges come in the
+    /// order of `ids`, the walls' last.
     pub fn boundary_edges<P: AsRef<[DVec2]>>(
         &self,
         polys: &[P],
@@ -512,6 +504,13 @@ mod tests {
         assert!(!map.hidden(DVec2::new(50.0, 120.0)), "in front of the row");
         assert!(!map.hidden(DVec2::new(500.0, 200.0)), "beyond its end");
         assert!(!map.hidden(DVec2::new(50.0, -200.0)), "the other side");
+    }
+
+    /// The boundary edges of all of `polys`.
+    fn boundary_edges<'a>(polys: impl Iterator<Item = &'a [DVec2]>) -> Vec<(DVec2, DVec2)> {
+        let polys: Vec<&[DVec2]> = polys.collect();
+        let ids: Vec<u32> = (0..polys.len() as u32).collect();
+        EdgeTwins::new(&polys).boundary_edges(&polys, &ids)
     }
 
     /// The sorting form [`EdgeTwins`] replaced, kept as its oracle.
