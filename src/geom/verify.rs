@@ -791,7 +791,7 @@ impl<'a> Verifier<'a> {
                     // The blockers nearest the point first (the stretch's order, by distance
                     // from its start): they subtend the widest angles, and a few of them often
                     // cover the cell.
-                    let found = search(&near);
+                    let found = search(near);
                     let conds = found?;
                     (conds, true)
                 }

@@ -21,7 +21,7 @@
 //!   infinite coordinate, or `min > max` on an axis; kept out of the hierarchy and always
 //!   returned), every object of a skipped cell, of a cell without VOs and of a cell id outside
 //!   the frame's grid;
-//! - a query allocates nothing beyond growing `out` (which also holds a bitmap of the culled
+//! - a query allocates nothing beyond growing `out` (which also holds a bitmap of the visible
 //!   objects while the query runs, so no sort is needed); the traversal stack is a fixed array (the
 //!   median split bounds the depth by `log2` of the box count; past the array, a subtree is
 //!   returned whole, which is conservative).
@@ -29,7 +29,7 @@
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::{Frame, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
-use crate::runtime::occlusion::{Cover, PreparedVo};
+use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe, Verdict};
 
 /// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
 /// leaf kept, by [`PreparedVo::cover`] alone, from memory laid out in tree order): on the
@@ -68,6 +68,8 @@ pub struct BoxTree {
     ids: Vec<u32>,
     /// Their boxes, in the same order.
     boxes: Vec<[f64; 6]>,
+    /// The objects whose boxes are invalid ([`box_is_valid`]), ascending: always in the PVS.
+    invalid: Vec<u32>,
     len: usize,
 }
 
@@ -99,9 +101,12 @@ impl BoxTree {
             "BoxTree: more than u32::MAX boxes"
         );
         let mut items: Vec<(u32, [f64; 6])> = Vec::with_capacity(boxes.len());
+        let mut invalid = Vec::new();
         for (i, b) in boxes.iter().enumerate() {
             if box_is_valid(b) {
                 items.push((i as u32, *b));
+            } else {
+                invalid.push(i as u32);
             }
         }
         let mut nodes: Vec<Node> = Vec::with_capacity(2 * items.len().div_ceil(LEAF_SIZE));
@@ -162,6 +167,7 @@ impl BoxTree {
             nodes,
             ids: items.iter().map(|&(i, _)| i).collect(),
             boxes: items.iter().map(|&(_, b)| b).collect(),
+            invalid,
             len: boxes.len(),
         }
     }
@@ -302,13 +308,14 @@ fn test(
     bx: &[f64; 6],
     min_top: f64,
 ) -> Option<u16> {
+    let g = GroupProbe::new(view, bx, min_top);
     let mut left = mask;
     let mut keep = mask;
     while left != 0 {
         let i = left.trailing_zeros() as usize;
         left &= left - 1;
         if let Some(Some(p)) = prepared.get(i) {
-            match p.cover_group(view, bx, min_top) {
+            match p.cover_group_probe(view, &g) {
                 Cover::Hidden => return None,
                 Cover::Outside => keep &= !(1 << i),
                 Cover::Partial => {}
@@ -318,7 +325,9 @@ fn test(
     Some(keep)
 }
 
-/// Whether a VO of `mask` hides box `bx`.
+/// Whether a VO of `mask` hides box `bx`: the VO-independent part of rule 3 once
+/// ([`Probe`]), then each VO's cheap tests, and the exact factor only for the VOs those left
+/// undecided, once none of them has hidden the box.
 #[inline]
 fn hidden(
     prepared: &[Option<PreparedVo>; MAX_VOS_PER_CELL],
@@ -326,17 +335,31 @@ fn hidden(
     mask: u16,
     bx: &[f64; 6],
 ) -> bool {
+    let probe = Probe::new(view, bx);
+    // The exact factor, the costly part of rule 3, only once no VO has hidden the box by the
+    // cheaper tests.
+    let mut pending = [(0usize, 0.0f64, 0.0f64); MAX_VOS_PER_CELL];
+    let mut np = 0;
     let mut left = mask;
     while left != 0 {
         let i = left.trailing_zeros() as usize;
         left &= left - 1;
         if let Some(Some(p)) = prepared.get(i) {
-            if p.cover(view, bx) == Cover::Hidden {
-                return true;
+            match p.verdict(view, &probe) {
+                Verdict::Done(Cover::Hidden) => return true,
+                Verdict::Done(_) => {}
+                Verdict::Factor { need, dl } => {
+                    if np < MAX_VOS_PER_CELL {
+                        pending[np] = (i, need, dl);
+                        np += 1;
+                    }
+                }
             }
         }
     }
-    false
+    pending[..np].iter().any(|&(i, need, dl)| {
+        matches!(prepared.get(i), Some(Some(p)) if p.settle(&probe, need, dl) == Cover::Hidden)
+    })
 }
 
 /// The PVS of cell `id` with record `rec`: `out` is cleared, then holds the ascending indices
@@ -380,13 +403,17 @@ pub fn pvs_with_stats(
         return all(out, st);
     }
 
-    // `out` first serves as a bitmap of the culled objects (one bit per object, in u32 words),
-    // then holds the visible ids after it; the bitmap is drained at the end. No other memory,
-    // and no sort: ids come out ascending from the bitmap.
+    // `out` first serves as a bitmap of the visible objects (one bit per object, in u32 words),
+    // then holds their ids after it; the bitmap is drained at the end. No other memory, and no
+    // sort: ids come out ascending from the bitmap. Marking the visible objects rather than the
+    // culled ones writes the smaller set when the VOs do their job.
     let n = tree.len;
     let words = n.div_ceil(32);
     out.resize(words, 0);
-    let cull = |out: &mut Vec<u32>, id: u32| out[(id >> 5) as usize] |= 1 << (id & 31);
+    let keep = |out: &mut Vec<u32>, id: u32| out[(id >> 5) as usize] |= 1 << (id & 31);
+    for &id in &tree.invalid {
+        keep(out, id);
+    }
 
     let mut stack = [(0u32, 0u16); STACK];
     let mut sp = 0;
@@ -402,20 +429,20 @@ pub fn pvs_with_stats(
         st.nodes_tested += 1;
         let Some(mask) = test(&prepared, &view, mask, &node.bounds, node.min_top) else {
             st.subtrees_culled += 1;
-            for &id in &tree.ids[range] {
-                cull(out, id);
-            }
             continue;
         };
         if mask == 0 || (node.left != LEAF && sp + 2 > STACK) {
             st.subtrees_kept += 1;
+            for &id in &tree.ids[range] {
+                keep(out, id);
+            }
             continue;
         }
         if node.left == LEAF {
             for k in range {
                 st.boxes_tested += 1;
-                if hidden(&prepared, &view, mask, &tree.boxes[k]) {
-                    cull(out, tree.ids[k]);
+                if !hidden(&prepared, &view, mask, &tree.boxes[k]) {
+                    keep(out, tree.ids[k]);
                 }
             }
             continue;
@@ -425,10 +452,7 @@ pub fn pvs_with_stats(
         sp += 2;
     }
     for w in 0..words {
-        let mut visible = !out[w];
-        if w == words - 1 && n % 32 != 0 {
-            visible &= (1u32 << (n % 32)) - 1;
-        }
+        let mut visible = out[w];
         while visible != 0 {
             let b = visible.trailing_zeros();
             visible &= visible - 1;
