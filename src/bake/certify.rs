@@ -17,7 +17,7 @@
 use glam::DVec2;
 
 use super::quantize::{quantize, Refused};
-use super::slice::{d_near, Support};
+use super::slice::{d_near, line_lambda, Support};
 use crate::geom::verify::Verifier;
 use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
@@ -140,7 +140,8 @@ impl<'a> Certifier<'a> {
                 pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y
             })
             .filter(|(p, s)| {
-                let ok = s.supports_beside(e0, e1, g, h, dn, d_near(p, &[a, b]));
+                let line = line_lambda(self.cell, p, a, b);
+                let ok = s.supports_beside(e0, e1, g, h, dn, d_near(p, &[a, b]), line);
                 new |= ok && !s.supports(e0, e1, g, h, floor);
                 ok
             })

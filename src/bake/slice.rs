@@ -4,16 +4,17 @@
 //! blockers near it with their base and top. Output: the slice levels (VO height levels of the
 //! store's frame), and for each VO the blockers that support it by rule 2.
 //! Invariants:
-//! - rule 2 (DESIGN.md section 3) decides support: `b <= min(e0, g)` and
-//!   `t >= e1 + (h - e1) * min(1, d_far(B) / d_near(s))`: the ray crosses the blocker at a
-//!   fraction `lambda` of its 2D length with `lambda <= d_far(B) / d_near(s)` (DESIGN.md) and
-//!   `lambda <= 1` (the crossing lies between the eye and the VO), so the brief's bound holds
-//!   with the smaller of the two ratios (proof in ARCHITECTURE.md, "Rules 2 and 3"); distances are computed in f64 and rounded
-//!   toward the conservative side (`d_far` up, `d_near` down, the bound up by
-//!   [`RULE2_SLACK_M`]), so a blocker admitted here supports the VO in exact arithmetic;
+//! - rule 2 (DESIGN.md section 3) decides support: with `lambda` a bound of the fraction of a
+//!   ray's 2D length at which it crosses the blocker, `t >= e1 + lambda (h - e1)` and
+//!   `b <= min(e0, g)` or `b <= e0 - lambda (e0 - g)`, with
+//!   `lambda = min(1, d_far(B) / d_near(s))` (proof in ARCHITECTURE.md, "Rules 2 and 3");
+//!   distances are computed in f64 and rounded toward the conservative side (`d_far` up,
+//!   `d_near` down, the bounds by [`RULE2_SLACK_M`]), so a blocker admitted here supports the
+//!   VO in exact arithmetic;
 //! - for one given VO segment `s`, [`Support::supports_beside`] also takes
-//!   `lambda <= d_far(B) / (d_far(B) + dist(B, s))` (ARCHITECTURE.md, "Rule 2, the tighter
-//!   bound"), never looser than the plain bound;
+//!   `lambda <= d_far(B) / (d_far(B) + dist(B, s))` and `lambda <= 1 - d_B / d_line`
+//!   ([`line_lambda`], distances from the VO's line; ARCHITECTURE.md, "Rule 2, the tighter
+//!   bounds"), never looser than the plain bound;
 //! - the *perspective-adjusted height* of a blocker, `e1 + (t - e1) max(1, d_near(B) / d_far(B))`, is the
 //!   VO top it supports for a VO as near as the blocker's nearest point. It only ranks blockers
 //!   for the slice histogram and picks the candidates of a slice; every VO is then checked
@@ -104,6 +105,45 @@ fn segments_may_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
     d1 * d2 <= 0.0 && d3 * d4 <= 0.0
 }
 
+/// An upper bound of the fraction `lambda = |p - y| / |p - x|` at which a ray's 2D segment
+/// from a point `p` of `cell` to a point `x` of the VO `a`–`b` crosses the convex polygon (or
+/// segment) `poly` at `y`, from the VO's line alone: `1 - d_poly / d_line`, where `d_line` is
+/// the greatest distance of a cell corner from the line and `d_poly` the least distance of a
+/// point of `poly` from it on the cell's side (0 when `poly` reaches the line). By similar
+/// triangles `|y - x| / |p - x|` is the ratio of the distances of `y` and `p` from the line
+/// (ARCHITECTURE.md, "Rule 2, the tighter bounds"). 1 when the line meets the cell. Rounded up.
+pub fn line_lambda(cell: &[DVec2], poly: &[DVec2], a: DVec2, b: DVec2) -> f64 {
+    let d = b - a;
+    let len = d.length();
+    if !(len > 0.0) {
+        return 1.0;
+    }
+    // Unit normal pointing to the cell's side.
+    let mut n = d.perp() / len;
+    let side = |p: DVec2, n: DVec2| n.dot(p - a);
+    if side(cell[0], n) < 0.0 {
+        n = -n;
+    }
+    let mut d_line: f64 = 0.0;
+    for &c in cell {
+        let s = side(c, n);
+        if !(s > 0.0) {
+            return 1.0;
+        }
+        d_line = d_line.max(s);
+    }
+    let d_poly = poly
+        .iter()
+        .map(|&v| side(v, n))
+        .fold(f64::INFINITY, f64::min);
+    if !(d_poly > 0.0) {
+        return 1.0;
+    }
+    // Rounding of the distances is relative 1e-15 or so: the allowance covers it many times.
+    let lambda = 1.0 - d_poly / d_line + 1e-9;
+    lambda.clamp(0.0, 1.0)
+}
+
 /// What rule 2 needs to know of a blocker seen from one cell.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Support {
@@ -125,24 +165,36 @@ impl Support {
         }
     }
 
-    /// Rule 2: this blocker supports a VO of top `h`, bottom `g`, at least `d_near_s` from the
-    /// cell, for eyes in `[e0, e1]`.
-    pub fn supports(&self, e0: f64, e1: f64, g: f64, h: f64, d_near_s: f64) -> bool {
-        if !(self.base <= e0.min(g)) || !(d_near_s > 0.0) {
+    /// Rule 2 for any bound `lambda` of the fraction of a ray's 2D length at which it crosses
+    /// this blocker: the ray's height there lies between `e0 - lambda (e0 - g)` and
+    /// `e1 + lambda (h - e1)` (ARCHITECTURE.md, "Rule 2"), which must lie within the blocker's
+    /// base and top. Both bounds are rounded toward refusal by [`RULE2_SLACK_M`].
+    fn holds(&self, e0: f64, e1: f64, g: f64, h: f64, lambda: f64) -> bool {
+        if !(lambda >= 0.0) {
             return false;
         }
-        let h = h.max(e1);
-        // The ray meets the blocker between the eye and the VO, so lambda <= 1 as well.
-        let bound = e1 + (h - e1) * (self.d_far / d_near_s).min(1.0);
-        self.top >= bound + RULE2_SLACK_M * (1.0 + bound.abs())
+        let lambda = lambda.min(1.0);
+        let low = e0 - lambda * (e0 - g).max(0.0);
+        let high = e1 + lambda * (h - e1).max(0.0);
+        // `b <= min(e0, g)` compares given values, with no arithmetic: exact.
+        (self.base <= e0.min(g) || self.base <= low - RULE2_SLACK_M * (1.0 + low.abs()))
+            && self.top >= high + RULE2_SLACK_M * (1.0 + high.abs())
     }
 
-    /// Rule 2 with the tighter bound, for one VO: `lambda <= d_far(B) / (d_far(B) + dist(B, s))`
+    /// Rule 2: this blocker supports a VO of top `h`, bottom `g`, at least `d_near_s` from the
+    /// cell, for eyes in `[e0, e1]`: `lambda <= min(1, d_far(B) / d_near(s))`.
+    pub fn supports(&self, e0: f64, e1: f64, g: f64, h: f64, d_near_s: f64) -> bool {
+        d_near_s > 0.0 && self.holds(e0, e1, g, h, self.d_far / d_near_s)
+    }
+
+    /// Rule 2 with the tighter bounds, for one VO: `lambda <= d_far(B) / (d_far(B) + dist(B, s))`
     /// as well, where `d_bs` is the least distance between this blocker and the VO's segment
-    /// (rounded down; 0 when they may meet). The crossing `y` splits the ray's 2D segment from
-    /// eye `p` to VO point `x` into `|p - y| <= d_far(B)` and `|y - x| >= dist(B, s)`, and
-    /// `u / (u + v)` grows with `u` and falls with `v` (ARCHITECTURE.md, "Rule 2, the tighter
-    /// bound"). It holds for the VO it was computed for, not for every VO of a distance band.
+    /// (rounded down; 0 when they may meet), and `lambda <= line`, the bound from the VO's line
+    /// ([`line_lambda`]). The crossing `y` splits the ray's 2D segment from eye `p` to VO point
+    /// `x` into `|p - y| <= d_far(B)` and `|y - x| >= dist(B, s)`, and `u / (u + v)` grows with
+    /// `u` and falls with `v` (ARCHITECTURE.md, "Rule 2, the tighter bounds"). They hold for
+    /// the VO they were computed for, not for every VO of a distance band.
+    #[allow(clippy::too_many_arguments)]
     pub fn supports_beside(
         &self,
         e0: f64,
@@ -151,16 +203,15 @@ impl Support {
         h: f64,
         d_near_s: f64,
         d_bs: f64,
+        line: f64,
     ) -> bool {
-        if !(self.base <= e0.min(g)) || !(d_near_s > 0.0) || !(d_bs >= 0.0) {
+        if !(d_near_s > 0.0) || !(d_bs >= 0.0) {
             return false;
         }
-        let h = h.max(e1);
         let lambda = (self.d_far / d_near_s)
             .min(self.d_far / (self.d_far + d_bs))
-            .min(1.0);
-        let bound = e1 + (h - e1) * lambda;
-        self.top >= bound + RULE2_SLACK_M * (1.0 + bound.abs())
+            .min(line);
+        self.holds(e0, e1, g, h, lambda)
     }
 
     /// The perspective-adjusted height: the VO top this blocker supports for a VO at its own
@@ -278,20 +329,46 @@ mod tests {
             d_near: 10.0,
         };
         // Bound: 2 + (h - 2) * 30 / 45 <= 12 <=> h <= 17.
-        assert!(s.supports_beside(1.5, 2.0, 0.0, 16.99, 20.0, 15.0));
-        assert!(!s.supports_beside(1.5, 2.0, 0.0, 17.01, 20.0, 15.0));
+        assert!(s.supports_beside(1.5, 2.0, 0.0, 16.99, 20.0, 15.0, 1.0));
+        assert!(!s.supports_beside(1.5, 2.0, 0.0, 17.01, 20.0, 15.0, 1.0));
         // Touching the VO it gives the plain rule; never less than the plain rule.
-        assert!(s.supports_beside(1.5, 2.0, 0.0, 11.99, 20.0, 0.0));
-        assert!(!s.supports_beside(1.5, 2.0, 0.0, 12.01, 20.0, 0.0));
-        assert!(s.supports_beside(1.5, 2.0, 0.0, 15.3, 40.0, 0.0));
-        let raised = Support { base: 0.5, ..s };
-        assert!(!raised.supports_beside(1.5, 2.0, 0.0, 3.0, 40.0, 15.0));
+        assert!(s.supports_beside(1.5, 2.0, 0.0, 11.99, 20.0, 0.0, 1.0));
+        assert!(!s.supports_beside(1.5, 2.0, 0.0, 12.01, 20.0, 0.0, 1.0));
+        assert!(s.supports_beside(1.5, 2.0, 0.0, 15.3, 40.0, 0.0, 1.0));
+        // The line's bound, when lower, decides: 2 + (h - 2) / 2 <= 12 <=> h <= 22.
+        assert!(s.supports_beside(1.5, 2.0, 0.0, 21.99, 20.0, 15.0, 0.5));
+        assert!(!s.supports_beside(1.5, 2.0, 0.0, 22.01, 20.0, 15.0, 0.5));
+        // A base above the VO's bottom: the lowest crossing is e0 - lambda (e0 - g) = 1.5 - 1.5
+        // lambda, 0.5 at lambda = 2/3 and 0.75 at lambda = 1/2.
+        let raised = Support { base: 0.6, ..s };
+        assert!(!raised.supports_beside(1.5, 2.0, 0.0, 3.0, 40.0, 15.0, 1.0));
+        assert!(raised.supports_beside(1.5, 2.0, 0.0, 3.0, 40.0, 15.0, 0.5));
     }
 
-    /// Rule 2's tighter bound against 3D rays: on random cells, blockers and VOs, whenever the
-    /// blocker supports the VO by [`Support::supports_beside`], every sampled ray from an eye to a
-    /// point of the VO passes, over each sampled point of its 2D segment inside the blocker,
-    /// between the blocker's base and top. The ray heights and the inside test are computed here
+    #[test]
+    fn line_lambda_is_the_ratio_of_distances_from_the_line() {
+        let cell = sq(0.0, 0.0, 10.0);
+        // The VO's line y = 30: the cell's far edge is 30 m from it, the blocker (y 10..20)
+        // 10 m at its nearest: lambda <= 1 - 10 / 30.
+        let (a, b) = (DVec2::new(-50.0, 30.0), DVec2::new(50.0, 30.0));
+        let l = line_lambda(&cell, &sq(0.0, 10.0, 10.0), a, b);
+        assert!(l >= 2.0 / 3.0 && l < 2.0 / 3.0 + 1e-6, "{l}");
+        // Either orientation of the VO.
+        assert_eq!(line_lambda(&cell, &sq(0.0, 10.0, 10.0), b, a), l);
+        // A blocker reaching the line, or a line through the cell: 1.
+        assert_eq!(line_lambda(&cell, &sq(0.0, 25.0, 10.0), a, b), 1.0);
+        let through = (DVec2::new(-50.0, 5.0), DVec2::new(50.0, 6.0));
+        assert_eq!(
+            line_lambda(&cell, &sq(0.0, 20.0, 5.0), through.0, through.1),
+            1.0
+        );
+    }
+
+    /// Rule 2's tighter bounds against 3D rays: on random cells, blockers (some standing above
+    /// the VO's bottom) and VOs, whenever the blocker supports the VO by
+    /// [`Support::supports_beside`], every sampled ray from an eye to a point of the VO passes,
+    /// over each sampled point of its 2D segment inside the blocker, between the blocker's base
+    /// and top. The ray heights and the inside test are computed here
     /// from the points alone.
     #[test]
     fn rule_2_tighter_bound_holds_for_3d_rays() {
@@ -309,7 +386,7 @@ mod tests {
             DVec2::new(50.0, 50.0),
             DVec2::new(0.0, 50.0),
         ];
-        let (mut supported, mut tighter_only, mut crossings) = (0, 0, 0);
+        let (mut supported, mut tighter_only, mut raised, mut crossings) = (0, 0, 0, 0);
         for _ in 0..3000 {
             // A square blocker in front of the cell, a VO beyond it.
             let (bx, by, w) = (
@@ -327,21 +404,31 @@ mod tests {
             let b = a + DVec2::new(-30.0 + 60.0 * rnd(), 20.0 + 150.0 * rnd());
             let top = 3.0 + 30.0 * rnd();
             let h = e1 + (top - e1) * (1.0 + 2.0 * rnd());
-            let sup = Support::new(&cell, &poly, g, top);
+            // Half the blockers stand above the VO's bottom, up to the lowest eye.
+            let base = if rnd() < 0.5 { g } else { g + (e0 - g) * rnd() };
+            let sup = Support::new(&cell, &poly, base, top);
             let dn = d_near(&cell, &[a, b]);
             let dbs = d_near(&poly, &[a, b]);
-            if !sup.supports_beside(e0, e1, g, h, dn, dbs) {
+            let line = line_lambda(&cell, &poly, a, b);
+            if !sup.supports_beside(e0, e1, g, h, dn, dbs, line) {
                 continue;
             }
             supported += 1;
             if !sup.supports(e0, e1, g, h, dn) {
                 tighter_only += 1;
             }
+            raised += (base > g) as usize;
             for _ in 0..40 {
                 let p = DVec2::new(50.0 * rnd(), 50.0 * rnd());
                 let (e, t) = (e0 + (e1 - e0) * rnd(), rnd());
                 let x = a + (b - a) * t;
-                let z = g + (h - g) * rnd();
+                // The VO's bottom and top edges too.
+                let z = match t {
+                    t if t < 0.1 => g,
+                    t if t > 0.9 => h,
+                    _ => g + (h - g) * rnd(),
+                };
+                let e = if rnd() < 0.2 { e0 } else { e };
                 for k in 1..200 {
                     let f = k as f64 / 200.0;
                     let y = p + (x - p) * f;
@@ -349,17 +436,19 @@ mod tests {
                         crossings += 1;
                         let zy = e + (z - e) * f;
                         assert!(
-                            zy <= top + 1e-9 && zy >= g - 1e-9,
-                            "ray at {zy} over {y}: blocker {poly:?} top {top}, VO {a}-{b} top {h}"
+                            zy <= top + 1e-9 && zy >= base - 1e-9,
+                            "ray at {zy} over {y}: blocker {poly:?} base {base} top {top}, \
+                             VO {a}-{b} top {h}"
                         );
                     }
                 }
             }
         }
-        // Many of them supported by the tighter bound alone.
+        // Many of them supported by the tighter bounds alone, many standing above the VO's
+        // bottom.
         assert!(
-            supported > 100 && tighter_only > 50 && crossings > 1000,
-            "{supported} {tighter_only} {crossings}"
+            supported > 100 && tighter_only > 50 && raised > 50 && crossings > 1000,
+            "{supported} {tighter_only} {raised} {crossings}"
         );
     }
 

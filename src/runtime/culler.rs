@@ -29,7 +29,7 @@
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::{Frame, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
-use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe, Verdict};
+use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe};
 
 /// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
 /// leaf kept, by [`PreparedVo::cover`] alone, from memory laid out in tree order): on the
@@ -326,8 +326,7 @@ fn test(
 }
 
 /// Whether a VO of `mask` hides box `bx`: the VO-independent part of rule 3 once
-/// ([`Probe`]), then each VO's cheap tests, and the exact factor only for the VOs those left
-/// undecided, once none of them has hidden the box.
+/// ([`Probe`]), then each VO's test.
 #[inline]
 fn hidden(
     prepared: &[Option<PreparedVo>; MAX_VOS_PER_CELL],
@@ -336,30 +335,17 @@ fn hidden(
     bx: &[f64; 6],
 ) -> bool {
     let probe = Probe::new(view, bx);
-    // The exact factor, the costly part of rule 3, only once no VO has hidden the box by the
-    // cheaper tests.
-    let mut pending = [(0usize, 0.0f64, 0.0f64); MAX_VOS_PER_CELL];
-    let mut np = 0;
     let mut left = mask;
     while left != 0 {
         let i = left.trailing_zeros() as usize;
         left &= left - 1;
         if let Some(Some(p)) = prepared.get(i) {
-            match p.verdict(view, &probe) {
-                Verdict::Done(Cover::Hidden) => return true,
-                Verdict::Done(_) => {}
-                Verdict::Factor { need, dl } => {
-                    if np < MAX_VOS_PER_CELL {
-                        pending[np] = (i, need, dl);
-                        np += 1;
-                    }
-                }
+            if p.cover_probe(view, &probe) == Cover::Hidden {
+                return true;
             }
         }
     }
-    pending[..np].iter().any(|&(i, need, dl)| {
-        matches!(prepared.get(i), Some(Some(p)) if p.settle(&probe, need, dl) == Cover::Hidden)
-    })
+    false
 }
 
 /// The PVS of cell `id` with record `rec`: `out` is cleared, then holds the ascending indices

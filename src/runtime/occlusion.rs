@@ -22,12 +22,14 @@
 //! footprint lies in it exactly when its four corners do.
 //!
 //! ## Heights
-//! The box is hidden when its footprint lies in the umbra, `zmin >= g`, `e0 >= g`, and
-//! `zmax <= e1 + (h - e1) * max(1, D_near / D_far)`, with `D_near` the least distance between the
-//! cell and the footprint and `D_far` the greatest distance between the cell and the VO. The
-//! brief's rule 3 has the ratio alone; the ray from an eye to the box crosses the VO's line
-//! before it reaches the box, so the ratio can also be taken as at least 1. Proof in
-//! ARCHITECTURE.md ("Rules 2 and 3").
+//! With `F = 1 + dl / d_line`, where `dl` is the least distance of the footprint beyond the
+//! VO's line and `d_line` the greatest distance of a cell point from that line, the box is hidden
+//! when its footprint lies in the umbra, `e0 >= g`, `h >= e1`, `zmax <= e1 + (h - e1) F` and
+//! `zmin >= min(g, e0 - (e0 - g) F)`. By similar triangles a ray from an eye to a box point
+//! crosses the VO's line at the fraction `mu = s_eye / (s_eye + s_box)` of its length (distances
+//! from the line), and `1 / mu >= F`; the ray's height there then lies in `[g, h]`. This factor
+//! is never below the brief's `max(1, D_near / D_far)`. Proof in ARCHITECTURE.md ("Rules 2
+//! and 3").
 
 use crate::runtime::frame::{CellView, VoGeom};
 
@@ -55,19 +57,15 @@ fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 pub struct PreparedVo {
     g: f64,
     h: f64,
-    /// Greatest distance between the grown cell and the VO.
-    d_far: f64,
-    /// `1 / d_far` and `1 / d_line` (their rounding changes a height factor by a relative
-    /// 1e-16, a top by far less than the margin).
-    inv_d_far: f64,
+    /// `1 / d_line`, with `d_line` the greatest distance between the grown cell and the VO's
+    /// line, rounded up by the margin: the height factor of a box is `1 + dl / d_line`.
     inv_d_line: f64,
+    /// `1 / d_line` with `d_line` rounded down by the margin (the least positive float when it
+    /// is not positive): an upper bound of every box's factor, for groups.
+    inv_d_line_lo: f64,
     /// The signed distance beyond the VO's line (the side away from the cell) as a linear form,
     /// `-orient(a, b, p) / |b - a|`.
     beyond_form: [f64; 3],
-    /// Greatest distance between the grown cell and the VO's line, rounded down by the margin
-    /// (a lower bound of every `D_far'` of [`Self::factor`]; the least positive float when it is
-    /// not positive, so that the bound it gives is infinite).
-    d_line: f64,
     /// False when the VO's line meets the cell: its umbra is empty.
     usable: bool,
     /// The umbra's binding half-planes as linear forms `f(p) = k[0] p.x + k[1] p.y + k[2]`,
@@ -78,15 +76,6 @@ pub struct PreparedVo {
     /// `c_b` is the corner whose `b - c` is most clockwise. (Near-parallel candidates differ by
     /// rounding only, far below [`MARGIN_M`].)
     planes: [[f64; 3]; 3],
-    /// The grown cell's corners in the VO's coordinates: `(t, s)`, `t` along `a -> b` from
-    /// `a`, `s > 0` the distance from the VO's line.
-    ts: [[f64; 2]; 4],
-    /// The least and greatest `t` and `s` of [`Self::ts`]: `[t_min, t_max, s_min, s_max]`.
-    ts_range: [f64; 4],
-    /// `t` of a point as a linear form (unit direction `a -> b`, 0 at `a`).
-    along: [f64; 3],
-    /// `|b - a|` (shrunk).
-    len: f64,
 }
 
 /// `orient(u, v, p)` as a linear form in `p`.
@@ -126,12 +115,6 @@ impl PreparedVo {
         } else if !sides.iter().all(|&s| s > 0.0) {
             usable = false;
         }
-        let mut d_far: f64 = 0.0;
-        for c in cs {
-            for p in [vo.a, vo.b] {
-                d_far = d_far.max(((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)).sqrt());
-            }
-        }
         let cross = |u: [f64; 2], v: [f64; 2]| u[0] * v[1] - u[1] * v[0];
         let away = |p: [f64; 2], c: [f64; 2]| [p[0] - c[0], p[1] - c[1]];
         let (mut ca, mut cb) = (cs[0], cs[0]);
@@ -152,132 +135,20 @@ impl PreparedVo {
         } else {
             [0.0; 3]
         };
-        let u = if norm > 0.0 {
-            [(b[0] - a[0]) / norm, (b[1] - a[1]) / norm]
-        } else {
-            [0.0; 2]
-        };
-        let along = [u[0], u[1], -(u[0] * a[0] + u[1] * a[1])];
-        let ts = cs.map(|c| {
-            let k = beyond_form;
-            [
-                along[0] * c[0] + along[1] * c[1] + along[2],
-                -(k[0] * c[0] + k[1] * c[1] + k[2]),
-            ]
-        });
         let mut d_line: f64 = 0.0;
         for c in cs {
             d_line = d_line.max(orient(a, b, c).abs() / norm);
         }
-        let d_line = d_line - MARGIN_M;
-        let d_line = if d_line > 0.0 {
-            d_line
-        } else {
-            f64::MIN_POSITIVE
-        };
-        let d_far = d_far + MARGIN_M;
+        let lo = d_line - MARGIN_M;
         PreparedVo {
-            inv_d_far: 1.0 / d_far,
-            inv_d_line: 1.0 / d_line,
+            inv_d_line: 1.0 / (d_line + MARGIN_M),
+            inv_d_line_lo: 1.0 / if lo > 0.0 { lo } else { f64::MIN_POSITIVE },
             planes,
             beyond_form,
             g: vo.g,
             h: vo.h,
-            d_far,
-            d_line,
-            usable,
-            ts,
-            ts_range: [
-                ts.iter().map(|c| c[0]).fold(f64::INFINITY, f64::min),
-                ts.iter().map(|c| c[0]).fold(f64::NEG_INFINITY, f64::max),
-                ts.iter().map(|c| c[1]).fold(f64::INFINITY, f64::min),
-                ts.iter().map(|c| c[1]).fold(f64::NEG_INFINITY, f64::max),
-            ],
-            along,
-            len: norm,
+            usable: usable && d_line.is_finite(),
         }
-    }
-
-    /// The tighter height factor `1 / mu` of rule 3 for a footprint `[x0, y0, x1, y1]` (grown)
-    /// lying in the umbra: `max(1, D_near / D_far', 1 + dist(F, line(s)) / D_far')`, where
-    /// `D_far'` is the greatest distance from the cell to the part of the VO that segments
-    /// from the cell to the footprint can cross (ARCHITECTURE.md, "Rule 3, the tighter bound").
-    fn factor(&self, fp: [f64; 4], d_near: f64, dl: f64) -> f64 {
-        // In the VO's own coordinates (`t` along `a -> b` from `a`, `s` the distance beyond its
-        // line), the segment from a cell corner `(t_c, -s_c)` to a footprint corner
-        // `(t_w, s_w)` (`s_c, s_w > 0`) crosses the line at `t = (t_c s_w + t_w s_c) / (s_c +
-        // s_w)`. The crossings of the 16 corner pairs bound those of every segment from the
-        // cell to the footprint (both convex).
-        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-        for w in [
-            [fp[0], fp[1]],
-            [fp[2], fp[1]],
-            [fp[2], fp[3]],
-            [fp[0], fp[3]],
-        ] {
-            let tw = self.along[0] * w[0] + self.along[1] * w[1] + self.along[2];
-            let k = self.beyond_form;
-            let sw = k[0] * w[0] + k[1] * w[1] + k[2];
-            if !(sw > 0.0) {
-                return 1.0;
-            }
-            for [tc, sc] in self.ts {
-                let t = (tc * sw + tw * sc) / (sc + sw);
-                t0 = t0.min(t);
-                t1 = t1.max(t);
-            }
-        }
-        self.span_factor(t0, t1, d_near, dl)
-    }
-
-    /// [`Self::factor`] from a span `[t0, t1]` of the VO's line holding every crossing (the
-    /// tighter bound holds for any such span: a wider one only makes `D_far'` larger).
-    fn span_factor(&self, t0: f64, t1: f64, d_near: f64, dl: f64) -> f64 {
-        let m = MARGIN_M;
-        let (t0, t1) = ((t0 - m).max(0.0), (t1 + m).min(self.len));
-        if !(t0 <= t1) {
-            return 1.0;
-        }
-        // The greatest distance from a cell corner to the crossings' span `[t0, t1]`.
-        let mut df2: f64 = 0.0;
-        for [tc, sc] in self.ts {
-            let e = (t0 - tc).abs().max((t1 - tc).abs());
-            df2 = df2.max(e * e + sc * sc);
-        }
-        let df = df2.sqrt() + m;
-        (d_near / df).max(1.0 + dl / df).max(1.0)
-    }
-
-    /// A cheaper [`Self::factor`], from a span that holds the crossings without computing
-    /// them: the crossing of the segment from cell corner `(t_c, -s_c)` to footprint point
-    /// `(t_w, s_w)` is `t = lam t_w + (1 - lam) t_c` with `lam = s_c / (s_c + s_w)`, which lies
-    /// between `lam_min = s_c,min / (s_c,min + s_w,max)` and `lam_max = s_c,max / (s_c,max +
-    /// s_w,min)`. For a fixed `lam`, `t >= t_c,min + lam (t_w,min - t_c,min)`, linear in `lam`,
-    /// so `t` is at least the lesser of its values at `lam_min` and `lam_max`; likewise for the
-    /// greatest `t`. Two divisions instead of sixteen; never above the exact factor by more
-    /// than rounding, which the margin covers.
-    fn coarse_factor(&self, fp: [f64; 4], d_near: f64, dl: f64) -> f64 {
-        let lin = |k: [f64; 3]| {
-            let (x0, x1) = (k[0] * fp[0], k[0] * fp[2]);
-            let (y0, y1) = (k[1] * fp[1], k[1] * fp[3]);
-            (
-                x0.min(x1) + y0.min(y1) + k[2],
-                x0.max(x1) + y0.max(y1) + k[2],
-            )
-        };
-        let (tw0, tw1) = lin(self.along);
-        let (sw0, sw1) = lin(self.beyond_form);
-        if !(sw0 > 0.0) {
-            return 1.0;
-        }
-        let [tc0, tc1, sc0, sc1] = self.ts_range;
-        let lam0 = sc0 / (sc0 + sw1);
-        let lam1 = sc1 / (sc1 + sw0);
-        let lo = |lam: f64| tc0 + lam * (tw0 - tc0);
-        let hi = |lam: f64| tc1 + lam * (tw1 - tc1);
-        let t0 = lo(lam0).min(lo(lam1));
-        let t1 = hi(lam0).max(hi(lam1));
-        self.span_factor(t0, t1, d_near, dl)
     }
 
     /// The least distance of the footprint `[x0, y0, x1, y1]` (grown) beyond the VO's line
@@ -306,59 +177,31 @@ impl PreparedVo {
 
     /// [`Self::cover`] of the box that `probe` was made from (with the same `view`).
     #[inline]
-    pub fn cover_probe(&self, view: &CellView, probe: &Probe) -> Cover {
-        match self.verdict(view, probe) {
-            Verdict::Done(c) => c,
-            Verdict::Factor { need, dl } => self.settle(probe, need, dl),
-        }
-    }
-
-    /// Rule 3 up to its exact tighter factor: the cover, or the height ratio `need` a factor
-    /// must reach and the box's distance `dl` beyond the VO's line, for [`Self::settle`].
-    #[inline]
-    pub(crate) fn verdict(&self, view: &CellView, p: &Probe) -> Verdict {
+    pub fn cover_probe(&self, view: &CellView, p: &Probe) -> Cover {
         if !self.usable {
-            return Verdict::Done(Cover::Outside);
+            return Cover::Outside;
         }
         if let Some(c) = self.footprint(p.fp) {
-            return Verdict::Done(c);
+            return c;
         }
-        // Heights. `zmin >= g` compares stored values, with no arithmetic: exact.
-        if !(p.zmin >= self.g && view.e0 >= self.g && self.h >= view.e1) {
-            return Verdict::Done(Cover::Partial);
+        // Heights (ARCHITECTURE.md, rule 3): with the factor `F = 1 + dl / d_line >= 1`, the
+        // box is hidden when `zmax <= e1 + (h - e1) F` and `zmin >= e0 - (e0 - g) F`.
+        if !(view.e0 >= self.g && self.h >= view.e1) {
+            return Cover::Partial;
         }
-        // A box touching the cell (D_near = 0) is refused outright.
+        // A box touching the cell is refused outright.
         if !p.apart {
-            return Verdict::Done(Cover::Partial);
+            return Cover::Partial;
         }
-        // Every factor below is at least 1: a box no taller than the VO is hidden.
-        if p.z <= self.h {
-            return Verdict::Done(Cover::Hidden);
+        // `zmin >= g` compares stored values, with no arithmetic: exact. Then `F >= 1` makes a
+        // box no taller than the VO hidden.
+        if p.zmin >= self.g && p.z <= self.h {
+            return Cover::Hidden;
         }
-        if !(self.h > view.e1) {
-            return Verdict::Done(Cover::Partial);
-        }
-        // Hidden when `z <= e1 + (h - e1) * F` for a valid factor `F`; the larger of the
-        // plain and the tighter bound decides (ARCHITECTURE.md, rule 3). The tighter factor
-        // `max(D_near, D_far' + dl) / D_far'` lies between its value at `D_far' = D_far`
-        // (`D_far' <= D_far`) and at `D_far' = d_line` (`<= D_far'`): the exact one, with its
-        // 16 crossings, is computed only when the top falls between the two.
-        let need = (p.z - view.e1) / (self.h - view.e1);
-        let dl = self.beyond(p.fp);
-        if p.d_near.max(self.d_far + dl) * self.inv_d_far >= need {
-            return Verdict::Done(Cover::Hidden);
-        }
-        if p.d_near.max(self.d_line + dl) * self.inv_d_line < need {
-            return Verdict::Done(Cover::Partial);
-        }
-        Verdict::Factor { need, dl }
-    }
-
-    /// The end of [`Self::verdict`]: the tighter factor against `need`, first from the coarse
-    /// span ([`Self::coarse_factor`], at most the exact factor), then exact.
-    pub(crate) fn settle(&self, p: &Probe, need: f64, dl: f64) -> Cover {
-        if self.coarse_factor(p.fp, p.d_near, dl) >= need || self.factor(p.fp, p.d_near, dl) >= need
-        {
+        let f = 1.0 + self.beyond(p.fp) * self.inv_d_line;
+        let top = view.e1 + (self.h - view.e1) * f;
+        let bottom_ok = p.zmin >= self.g || p.zlo >= view.e0 - (view.e0 - self.g) * f;
+        if p.z <= top && bottom_ok {
             Cover::Hidden
         } else {
             Cover::Partial
@@ -398,11 +241,10 @@ impl PreparedVo {
 impl PreparedVo {
     /// How this VO covers a group of boxes with bounds `bounds` whose least top is `min_top`:
     /// [`Self::cover`] of the bounds, except that `Partial` becomes `Outside` when no box of the
-    /// group can meet rule 3's height bound. For a box inside the bounds, `D_near` and its
-    /// distance `dl` beyond the VO's line are at most those of the bounds' farthest points
-    /// (`d_max`, `dl_max`), and both of rule 3's factors are at most
-    /// `max(1, d_max / d_line, 1 + dl_max / d_line)`, as `D_far >= D_far' >= d_line`; a group
-    /// whose every top exceeds the top that factor allows has no box this VO hides.
+    /// group can meet rule 3's height bound. A box inside the bounds lies at most `dl_max`
+    /// beyond the VO's line, the bounds' farthest distance, so its factor `1 + dl / d_line` is
+    /// at most `1 + dl_max / d_line` (with `d_line` rounded down); a group whose every top
+    /// exceeds the top that factor allows has no box this VO hides.
     pub fn cover_group(&self, view: &CellView, bounds: &[f64; 6], min_top: f64) -> Cover {
         self.cover_group_probe(view, &GroupProbe::new(view, bounds, min_top))
     }
@@ -421,8 +263,8 @@ impl PreparedVo {
     #[inline]
     pub(crate) fn group_partial(&self, view: &CellView, g: &GroupProbe) -> Cover {
         let m = MARGIN_M;
-        let dl_max = self.beyond_max(g.probe.fp) + m;
-        let f_max = (g.d_max.max(self.d_line + dl_max) * self.inv_d_line).max(1.0);
+        let dl_max = (self.beyond_max(g.probe.fp) + m).max(0.0);
+        let f_max = 1.0 + dl_max * self.inv_d_line_lo;
         let top_max = view.e1 + (self.h - view.e1).max(0.0) * f_max;
         if g.min_top > top_max + m {
             Cover::Outside
@@ -433,17 +275,18 @@ impl PreparedVo {
 }
 
 /// The part of rule 3 that depends on a box and the cell but not on the VO, computed once per
-/// box for every VO of the cell: the grown footprint, the top, and `D_near`.
+/// box for every VO of the cell: the grown footprint, the top, and whether it is apart from the
+/// cell.
 #[derive(Clone, Copy, Debug)]
 pub struct Probe {
     /// The footprint grown by the margin, `[x0, y0, x1, y1]`.
     fp: [f64; 4],
     zmin: f64,
+    /// The bottom lowered by the margin.
+    zlo: f64,
     /// The top grown by the margin.
     z: f64,
-    /// The least distance between the grown footprint and the grown cell.
-    d_near: f64,
-    /// The grown footprint and the grown cell are apart (`D_near > 0`).
+    /// The grown footprint and the grown cell are apart.
     apart: bool,
 }
 
@@ -454,48 +297,32 @@ impl Probe {
         let m = MARGIN_M;
         let fp = [bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m];
         let [cx0, cy0, cx1, cy1] = view.rect;
-        let dx = (fp[0] - (cx1 + m)).max((cx0 - m) - fp[2]).max(0.0);
-        let dy = (fp[1] - (cy1 + m)).max((cy0 - m) - fp[3]).max(0.0);
         Probe {
             fp,
             zmin: bx[2],
+            zlo: bx[2] - m,
             z: bx[5] + m,
-            d_near: (dx * dx + dy * dy).sqrt(),
-            apart: dx > 0.0 || dy > 0.0,
+            apart: fp[0] > cx1 + m || fp[2] < cx0 - m || fp[1] > cy1 + m || fp[3] < cy0 - m,
         }
     }
 }
 
-/// [`Probe`] for a group of boxes (a subtree of the culler): the probe of its bounds, the
-/// greatest distance `d_max` between the cell and the bounds (grown by the margin), and the
+/// [`Probe`] for a group of boxes (a subtree of the culler): the probe of its bounds and the
 /// least top of the group.
 #[derive(Clone, Copy, Debug)]
 pub struct GroupProbe {
     pub(crate) probe: Probe,
-    d_max: f64,
     min_top: f64,
 }
 
 impl GroupProbe {
     #[inline]
     pub fn new(view: &CellView, bounds: &[f64; 6], min_top: f64) -> GroupProbe {
-        let m = MARGIN_M;
-        let [cx0, cy0, cx1, cy1] = view.rect;
-        let dx = (bounds[3] - cx0).abs().max((cx1 - bounds[0]).abs());
-        let dy = (bounds[4] - cy0).abs().max((cy1 - bounds[1]).abs());
         GroupProbe {
             probe: Probe::new(view, bounds),
-            d_max: (dx * dx + dy * dy).sqrt() + 2.0 * m,
             min_top,
         }
     }
-}
-
-/// What [`PreparedVo::verdict`] leaves: a cover, or the exact factor to compute.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Verdict {
-    Done(Cover),
-    Factor { need: f64, dl: f64 },
 }
 
 /// Whether `vo` hides box `bx` from `view` (rule 3).
@@ -538,27 +365,33 @@ mod tests {
     }
 
     #[test]
-    fn the_top_bound_follows_rule_3() {
-        // D_near = 15 < D_far = dist((10,0), (-20,20)) = sqrt(1300): the plain ratio is capped
-        // at 1. The tighter bound: segments from the cell to the box x 3..7, y 25..28 cross the
-        // VO's line y = 20 between x = 5/3 and 25/3, so D_far' = dist((0,0), (25/3, 20)) =
-        // 65/3, and the box lies 5 m beyond the line: the factor is 1 + 5 / (65/3) = 16/13, the
-        // top 2 + 8 * 16/13 = 11.846 (less the margins).
+    fn the_height_bounds_follow_rule_3() {
+        // The VO's line y = 20 lies 20 m from the cell's far edge y = 0 (20.001 m from the
+        // grown cell): a box 5 m beyond it has the factor F = 1 + 5 / 20 = 1.25, so its top may
+        // reach 2 + 8 * 1.25 = 12 (less the margins). The plain rule's D_near / D_far is 15 /
+        // sqrt(1300) < 1, and the bound through D_far' of the crossings, 16/13, is lower too.
         let v = view();
         let w = wall(10.0);
-        let top = 2.0 + 8.0 * 16.0 / 13.0;
+        let top = 2.0 + 8.0 * 1.25;
         let under = [3.0, 25.0, 0.0, 7.0, 28.0, top - 0.02];
         let over = [3.0, 25.0, 0.0, 7.0, 28.0, top + 0.02];
         assert!(hides(&v, &w, &under));
         assert!(!hides(&v, &w, &over));
-        // Below the VO's bottom: visible under it.
-        assert!(!hides(&v, &w, &[3.0, 100.0, -1.0, 7.0, 101.0, 1.0]));
-        // Far behind: D_near = 90, the plain bound 2 + 8 * 90 / sqrt(1300) = 21.97; the tighter
-        // one, with crossings between x = 0.330 and 9.670 and the box 80 m beyond the line, is
-        // 2 + 8 * (1 + 80 / 22.215) = 38.81: the larger decides.
-        let top = 38.809;
+        // Far behind: 80 m beyond the line, F = 5, the top 2 + 8 * 5 = 42.
+        let top = 42.0;
         assert!(hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top - 0.02]));
         assert!(!hides(&v, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, top + 0.02]));
+        // Below the VO's bottom g = 0: the lowest eye e0 = 1.5 looks down at it, and the ray
+        // still passes over the bottom when zmin >= e0 - (e0 - g) F = 1.5 - 1.5 F. At 5 m
+        // beyond the line that is -0.375; at 80 m, -6.
+        assert!(hides(&v, &w, &[3.0, 25.0, -0.35, 7.0, 28.0, 1.0]));
+        assert!(!hides(&v, &w, &[3.0, 25.0, -0.4, 7.0, 28.0, 1.0]));
+        assert!(hides(&v, &w, &[3.0, 100.0, -5.98, 7.0, 101.0, 1.0]));
+        assert!(!hides(&v, &w, &[3.0, 100.0, -6.02, 7.0, 101.0, 1.0]));
+        // With the eyes at the VO's bottom (e0 = g), nothing below it is hidden.
+        let flat = CellView { e0: 0.0, ..v };
+        assert!(hides(&flat, &w, &[3.0, 100.0, 0.0, 7.0, 101.0, 1.0]));
+        assert!(!hides(&flat, &w, &[3.0, 100.0, -0.01, 7.0, 101.0, 1.0]));
     }
 
     #[test]
@@ -672,56 +505,6 @@ mod tests {
     }
 
     #[test]
-    fn the_coarse_factor_never_exceeds_the_exact_one() {
-        // Boxes whose footprints lie in the umbra of random VOs: the coarse span holds the
-        // exact crossings, so its factor is at most the exact factor (up to rounding).
-        let mut x: u64 = 777;
-        let mut r = |lo: f64, hi: f64| {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
-        };
-        let v = view();
-        let (mut tried, mut equal) = (0, 0);
-        for _ in 0..4000 {
-            let vo = VoGeom {
-                a: [r(-60.0, 70.0), r(-60.0, 70.0)],
-                b: [r(-60.0, 70.0), r(-60.0, 70.0)],
-                g: 0.0,
-                h: r(2.0, 30.0),
-            };
-            let p = PreparedVo::new(&v, &vo);
-            for _ in 0..10 {
-                let (cx, cy, w, d) = (
-                    r(-150.0, 160.0),
-                    r(-150.0, 160.0),
-                    r(0.5, 30.0),
-                    r(0.5, 30.0),
-                );
-                let bx = [cx, cy, 0.0, cx + w, cy + d, 5.0];
-                let probe = Probe::new(&v, &bx);
-                if !p.usable || p.footprint(probe.fp).is_some() {
-                    continue;
-                }
-                let dl = p.beyond(probe.fp);
-                let coarse = p.coarse_factor(probe.fp, probe.d_near, dl);
-                let exact = p.factor(probe.fp, probe.d_near, dl);
-                assert!(coarse >= 1.0, "{vo:?} {bx:?}");
-                assert!(
-                    coarse <= exact * (1.0 + 1e-12),
-                    "{coarse} > {exact}: {vo:?} {bx:?}"
-                );
-                tried += 1;
-                equal += (coarse >= exact * (1.0 - 1e-12)) as usize;
-            }
-        }
-        // Enough boxes in umbrae to mean something, and the coarse factor often not the exact.
-        assert!(tried > 500, "{tried} boxes in umbrae");
-        assert!(equal < tried, "the coarse factor is always the exact one");
-    }
-
-    #[test]
     fn rule_3_with_the_tighter_bound_hides_only_what_3d_rays_show_hidden() {
         // A fixed linear congruential sequence: VOs around a 10 m cell, boxes around them.
         let mut x: u64 = 12345;
@@ -732,7 +515,7 @@ mod tests {
             lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
         };
         let v = view();
-        let (mut hidden, mut outside, mut gained) = (0, 0, 0);
+        let (mut hidden, mut outside, mut gained, mut below) = (0, 0, 0, 0);
         for _ in 0..4000 {
             let vo = VoGeom {
                 a: [r(-60.0, 70.0), r(-60.0, 70.0)],
@@ -748,7 +531,9 @@ mod tests {
                     r(0.5, 30.0),
                     r(0.5, 30.0),
                 );
-                let bx = [cx, cy, 0.0, cx + w, cy + d, r(0.5, 80.0)];
+                // Some boxes reach below the VO's bottom (hidden only by the bottom bound).
+                let z0 = if r(0.0, 1.0) < 0.3 { r(-8.0, 0.0) } else { 0.0 };
+                let bx = [cx, cy, z0, cx + w, cy + d, r(0.5, 80.0)];
                 let c = p.cover(&v, &bx);
                 // The plain rule (three planes, the D_near / D_far bound) is implied.
                 if plain_hidden(&v, &vo, &bx) {
@@ -757,6 +542,7 @@ mod tests {
                 if c == Cover::Hidden {
                     hidden += 1;
                     gained += !plain_hidden(&v, &vo, &bx) as usize;
+                    below += (z0 < 0.0) as usize;
                     // Rays from eyes of the cell (corners, centre, random; lowest and highest
                     // eye) to points of the box (corners, random) all pass through the quad.
                     for k in 0..40 {
@@ -800,8 +586,9 @@ mod tests {
             }
         }
         assert!(
-            hidden > 100 && outside > 1000 && gained > 10,
-            "{hidden} hidden ({gained} by the tighter bound alone), {outside} outside"
+            hidden > 100 && outside > 1000 && gained > 10 && below > 10,
+            "{hidden} hidden ({gained} by the tighter bounds alone, {below} reaching below the \
+             VO), {outside} outside"
         );
     }
 }

@@ -170,16 +170,21 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
                             .iter()
                             .flat_map(|c| bl.polygon.iter().map(move |v| c.distance(*v)))
                             .fold(0.0, f64::max);
-                        // With `beside`, rule 2's tighter bound for this segment too:
-                        // lambda <= d_far / (d_far + dist(B, s)) (ARCHITECTURE.md).
+                        // With `beside`, rule 2's tighter bounds for this segment too:
+                        // lambda <= d_far / (d_far + dist(B, s)), and lambda <= 1 - (the
+                        // blocker's least distance from the VO's line) / (the cell's greatest)
+                        // (ARCHITECTURE.md).
                         let beside = if beside {
-                            d_far / (d_far + poly_segment_distance(&bl.polygon, a, b))
+                            let along = d_far / (d_far + poly_segment_distance(&bl.polygon, a, b));
+                            along.min(line_ratio(&cell, &bl.polygon, a, b))
                         } else {
                             1.0
                         };
-                        let bound = view.e1 + (vo.h - view.e1) * (d_far / dn).min(beside).min(1.0);
-                        bl.base <= view.e0.min(vo.g)
-                            && bl.top >= bound
+                        let lambda = (d_far / dn).min(beside).min(1.0);
+                        let high = view.e1 + (vo.h - view.e1) * lambda;
+                        let low = view.e0 - (view.e0 - vo.g) * lambda;
+                        (bl.base <= view.e0.min(vo.g) || bl.base <= low - 1e-6)
+                            && bl.top >= high
                             && convex_interiors_disjoint(&bl.polygon, &cell)
                     })
                     .map(|bl| bl.polygon.clone())
@@ -241,6 +246,28 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
         }
     }
     (cells_with_vos, checked)
+}
+
+/// `1 - d_poly / d_line` for the line through `a`, `b`: `d_line` the greatest distance of a cell
+/// corner from it, `d_poly` the least distance of a polygon vertex from it on the cell's side (1
+/// when the polygon reaches the line or the line meets the cell; written here again, apart from
+/// the bake's own).
+fn line_ratio(cell: &[DVec2; 4], poly: &[DVec2], a: DVec2, b: DVec2) -> f64 {
+    let n = (b - a).perp().normalize();
+    let centre = (cell[0] + cell[2]) * 0.5;
+    let sign = if n.dot(centre - a) > 0.0 { 1.0 } else { -1.0 };
+    let dist = |p: DVec2| sign * n.dot(p - a);
+    let d_line = cell
+        .iter()
+        .map(|&c| dist(c))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let nearest = cell.iter().map(|&c| dist(c)).fold(f64::INFINITY, f64::min);
+    let d_poly = poly.iter().map(|&v| dist(v)).fold(f64::INFINITY, f64::min);
+    if nearest > 0.0 && d_poly > 0.0 {
+        1.0 - d_poly / d_line
+    } else {
+        1.0
+    }
 }
 
 /// Least distance between a convex polygon (or a 2-point wall) and the segment `a`-`b`, 0 when
