@@ -13,7 +13,10 @@
 //!   is culled by one when its bounding box lies in the segment's umbra seen from the cell (the
 //!   runtime's single-umbra rule, tested here in plain f64 with a 1 mm margin on the side of
 //!   culling less); `vos` of them are chosen greedily by the objects they add. It is the ceiling
-//!   issue 11 measures (10 ideal VOs), for reports to compare the bake against.
+//!   issue 11 measures (10 ideal VOs), for reports to compare the bake against;
+//! - [`ceiling_sliced`], the same once heights count: per slice of VO tops, the runs hidden by
+//!   the blockers that support such a VO on their line (rule 2), objects culled when rule 3's
+//!   heights hold too.
 //!
 //! Why [`hidden_2d`] bounds the VO method: a stored VO certifies only a region that blockers
 //! disjoint from the cell hide in 2D (rule 1), and rule 3 adds heights, which can only cull less.
@@ -38,7 +41,7 @@ use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
 use crate::geom::predicates::{convex_interiors_disjoint, segment_meets_convex};
-use crate::scene::Scene;
+use crate::scene::{Blocker, Scene};
 
 /// Sampling density of [`hidden_2d`].
 #[derive(Clone, Copy, Debug)]
@@ -68,9 +71,17 @@ struct Outside<'a> {
 
 impl<'a> Outside<'a> {
     fn new(scene: &'a Scene, cell: &[DVec2; 4]) -> Self {
+        Self::with(scene, cell, |_| true)
+    }
+
+    /// The blockers outside the cell that `keep` accepts.
+    fn with(scene: &'a Scene, cell: &[DVec2; 4], keep: impl Fn(&Blocker) -> bool) -> Self {
         let tree = RTree::bulk_load(
             (0..scene.blockers.len())
-                .filter(|&i| convex_interiors_disjoint(&scene.blockers[i].polygon, cell))
+                .filter(|&i| {
+                    keep(&scene.blockers[i])
+                        && convex_interiors_disjoint(&scene.blockers[i].polygon, cell)
+                })
                 .map(|i| {
                     let (lo, hi) = bounds(&scene.blockers[i].polygon);
                     GeomWithData::new(Rectangle::from_corners(lo, hi), i as u32)
@@ -88,8 +99,22 @@ impl<'a> Outside<'a> {
     /// `own`. `hint` is a blocker that blocked a nearby segment: it is tried first, and set to
     /// the blocker found. The answer does not depend on the hint.
     fn blocked(&self, a: DVec2, b: DVec2, own: Range<usize>, hint: &mut Option<u32>) -> bool {
+        self.blocked_by(a, b, own, hint, &|_| true)
+    }
+
+    /// [`Self::blocked`] by the blockers that `keep` accepts.
+    fn blocked_by(
+        &self,
+        a: DVec2,
+        b: DVec2,
+        own: Range<usize>,
+        hint: &mut Option<u32>,
+        keep: &dyn Fn(&Blocker) -> bool,
+    ) -> bool {
         let meets = |i: usize| {
-            !own.contains(&i) && segment_meets_convex(a, b, &self.scene.blockers[i].polygon)
+            !own.contains(&i)
+                && keep(&self.scene.blockers[i])
+                && segment_meets_convex(a, b, &self.scene.blockers[i].polygon)
         };
         if let Some(h) = *hint {
             if meets(h as usize) {
@@ -250,10 +275,39 @@ const LINE_REACH_M: f64 = 200.0;
 /// the hidden runs of the candidate lines as segments, the objects whose boxes lie in each one's
 /// umbra, and a greedy choice.
 pub fn ceiling_2d(scene: &Scene, r: [f64; 4], p: &CeilingParams) -> Ceiling {
+    ceiling(scene, r, None, p)
+}
+
+/// Heights of a cell for [`ceiling_sliced`]: its ground (the VOs' bottom) and its eyes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Heights {
+    pub g: f64,
+    pub e0: f64,
+    pub e1: f64,
+}
+
+/// VO tops of [`ceiling_sliced`]'s slices, metres above the highest eye.
+pub const SLICES_ABOVE_EYE_M: [f64; 7] = [1.0, 2.0, 4.0, 6.0, 10.0, 16.0, 24.0];
+
+/// What `p.vos` ideal VOs could cull from the cell `r` in 2.5D, sliced: at each VO top `t` of
+/// [`SLICES_ABOVE_EYE_M`] above the eyes, the candidate runs of a line are those hidden by the
+/// blockers that support a VO of top `t` on that line by rule 2, with its bound from the line
+/// (`lambda <= 1 - d_B / d_line`, distances from the line: `top >= e1 + lambda (t - e1)`, and
+/// `base <= min(e0, g)` or `base <= e0 - lambda (e0 - g)`; ARCHITECTURE.md); a candidate culls
+/// an object when its box lies in the segment's umbra and rule 3's heights hold for a VO of top
+/// `t` (written here apart from the runtime's: `zmax <= e1 + (t - e1) F` and
+/// `zmin >= min(g, e0 - (e0 - g) F)`, `F = 1 + dist(box, line) / d_line`); the greedy choice
+/// runs across the slices. An estimate of what 10 VOs reach once heights count: optimistic by
+/// sampling like [`ceiling_2d`], lower where tops between the slices would do better.
+pub fn ceiling_sliced(scene: &Scene, r: [f64; 4], h: Heights, p: &CeilingParams) -> Ceiling {
+    ceiling(scene, r, Some(h), p)
+}
+
+/// [`ceiling_2d`] (no heights) or [`ceiling_sliced`].
+fn ceiling(scene: &Scene, r: [f64; 4], heights: Option<Heights>, p: &CeilingParams) -> Ceiling {
     let cell = cell_corners(r);
-    let outside = Outside::new(scene, &cell);
     let mut out = Ceiling::default();
-    if outside.is_empty() || p.directions == 0 || p.cell_points == 0 || !(p.step_m > 0.0) {
+    if p.directions == 0 || p.cell_points == 0 || !(p.step_m > 0.0) {
         out.by_count = vec![0; p.vos];
         return out;
     }
@@ -275,11 +329,56 @@ pub fn ceiling_2d(scene: &Scene, r: [f64; 4], p: &CeilingParams) -> Ceiling {
             (0..count).map(move |j| (n, clear + j as f64 * p.spacing_m))
         })
         .collect();
-    let candidates: Vec<[DVec2; 2]> = lines
-        .par_iter()
-        .flat_map_iter(|&(n, d)| hidden_runs(&outside, &eyes, centre, n, d, reach, p))
-        .collect();
-    // The objects in each candidate's umbra.
+    // The slices' VO tops (none: heights ignored).
+    let tops: Vec<Option<f64>> = match heights {
+        None => vec![None],
+        Some(h) => SLICES_ABOVE_EYE_M.iter().map(|d| Some(h.e1 + d)).collect(),
+    };
+    let mut candidates: Vec<([DVec2; 2], Option<f64>)> = Vec::new();
+    for &top in &tops {
+        // Blockers low enough at their base and taller than the eyes; per line, those that
+        // support a VO of this top on it by rule 2 with the line's bound of lambda.
+        let outside = Outside::with(scene, &cell, |b| match heights {
+            Some(h) => b.base <= h.e0 && b.top > h.e1,
+            None => true,
+        });
+        if outside.is_empty() {
+            continue;
+        }
+        let cs = &cell;
+        candidates.extend(
+            lines
+                .par_iter()
+                .flat_map_iter(|&(n, d)| {
+                    let at = |v: DVec2| d - n.dot(v - centre);
+                    let d_line = cs.iter().map(|&c| at(c)).fold(0.0, f64::max);
+                    let keep = |b: &Blocker| match (top, heights) {
+                        (Some(t), Some(h)) => {
+                            let d_b = b
+                                .polygon
+                                .iter()
+                                .map(|&v| at(v))
+                                .fold(f64::INFINITY, f64::min);
+                            let lambda = if d_b > 0.0 {
+                                1.0 - d_b / d_line + 1e-9
+                            } else {
+                                1.0
+                            };
+                            let lambda = lambda.clamp(0.0, 1.0);
+                            b.top >= h.e1 + lambda * (t - h.e1)
+                                && (b.base <= h.g.min(h.e0)
+                                    || b.base <= h.e0 - lambda * (h.e0 - h.g))
+                        }
+                        _ => true,
+                    };
+                    hidden_runs(&outside, &keep, &eyes, centre, n, d, reach, p)
+                })
+                .collect::<Vec<_>>()
+                .into_iter()
+                .map(|s| (s, top)),
+        );
+    }
+    // The objects each candidate culls.
     let boxes: Vec<[DVec2; 4]> = scene
         .objects
         .iter()
@@ -290,9 +389,19 @@ pub fn ceiling_2d(scene: &Scene, r: [f64; 4], p: &CeilingParams) -> Ceiling {
         .collect();
     let culls: Vec<Vec<u32>> = candidates
         .par_iter()
-        .map(|&[a, b]| {
+        .map(|&([a, b], top)| {
             (0..boxes.len() as u32)
-                .filter(|&o| box_in_umbra(&cell, &boxes[o as usize], a, b))
+                .filter(|&o| {
+                    let bx = &boxes[o as usize];
+                    box_in_umbra(&cell, bx, a, b)
+                        && match (top, heights) {
+                            (Some(t), Some(h)) => {
+                                let z = &scene.objects[o as usize].bbox;
+                                heights_hold(&cell, bx, (z.min.z, z.max.z), a, b, t, h)
+                            }
+                            _ => true,
+                        }
+                })
                 .collect()
         })
         .collect();
@@ -313,7 +422,7 @@ pub fn ceiling_2d(scene: &Scene, r: [f64; 4], p: &CeilingParams) -> Ceiling {
                 taken[o as usize] = true;
             }
             total += gain;
-            let [a, b] = candidates[i];
+            let ([a, b], _) = candidates[i];
             out.vos.push([a.x, a.y, b.x, b.y]);
         }
         out.by_count.push(total);
@@ -327,8 +436,10 @@ pub fn ceiling_2d(scene: &Scene, r: [f64; 4], p: &CeilingParams) -> Ceiling {
 /// The candidate segments on the line `{x : n . (x - centre) = d}`: its points every `step_m`
 /// within `centre ± reach`, the maximal runs of those hidden from every eye, each shortened by
 /// one step at both ends and kept when at least `min_len_m` long; in order along the line.
+#[allow(clippy::too_many_arguments)]
 fn hidden_runs(
     outside: &Outside,
+    keep: &dyn Fn(&Blocker) -> bool,
     eyes: &[DVec2],
     centre: DVec2,
     n: DVec2,
@@ -362,7 +473,7 @@ fn hidden_runs(
         let q = foot + u * t;
         for j in 0..eyes.len() {
             let e = (seer + j) % eyes.len();
-            if !outside.blocked(eyes[e], q, 0..0, &mut hints[e]) {
+            if !outside.blocked_by(eyes[e], q, 0..0, &mut hints[e], keep) {
                 seer = e;
                 return false;
             }
@@ -411,6 +522,37 @@ fn box_in_umbra(cell: &[DVec2; 4], bx: &[DVec2; 4], a: DVec2, b: DVec2) -> bool 
         .all(|&w| cell.iter().all(|&c| crosses(c, w, a, b)))
 }
 
+/// Rule 3's heights for a box (corners `bx`, heights `z = (zmin, zmax)`) in the umbra of a VO
+/// `[a, b]` of top `t` standing on the ground `h.g`: with `F = 1 + dist(box, line) / d_line`
+/// (`d_line` the greatest distance of a cell corner from the VO's line), `zmax <= e1 + (t - e1)
+/// F` and `zmin >= min(g, e0 - (e0 - g) F)`, each with [`UMBRA_MARGIN_M`] to spare.
+fn heights_hold(
+    cell: &[DVec2; 4],
+    bx: &[DVec2; 4],
+    (zmin, zmax): (f64, f64),
+    a: DVec2,
+    b: DVec2,
+    t: f64,
+    h: Heights,
+) -> bool {
+    let m = UMBRA_MARGIN_M;
+    let d_line = cell
+        .iter()
+        .map(|&c| side(a, b, c).abs())
+        .fold(0.0, f64::max)
+        + m;
+    let dl = (bx
+        .iter()
+        .map(|&w| side(a, b, w).abs())
+        .fold(f64::INFINITY, f64::min)
+        - m)
+        .max(0.0);
+    let f = 1.0 + dl / d_line;
+    let top = h.e1 + (t - h.e1).max(0.0) * f;
+    let bottom = h.g.min(h.e0 - (h.e0 - h.g).max(0.0) * f);
+    h.e0 >= h.g && zmax + m <= top && zmin - m >= bottom
+}
+
 fn bounds(p: &[DVec2]) -> ([f64; 2], [f64; 2]) {
     let (lo, hi) = p.iter().fold(
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
@@ -426,11 +568,17 @@ mod tests {
 
     /// A scene from axis-aligned boxes `[x0, y0, x1, y1]` (world metres), 20 m tall, in order.
     fn boxes_scene(boxes: &[[f64; 4]]) -> Scene {
+        let tall: Vec<([f64; 4], f64)> = boxes.iter().map(|&b| (b, 20.0)).collect();
+        boxes_scene_of(&tall)
+    }
+
+    /// A scene from axis-aligned boxes `[x0, y0, x1, y1]` (world metres) and their heights.
+    fn boxes_scene_of(boxes: &[([f64; 4], f64)]) -> Scene {
         let features: Vec<String> = boxes
             .iter()
-            .map(|[x0, y0, x1, y1]| {
+            .map(|([x0, y0, x1, y1], h)| {
                 format!(
-                    r#"{{"type":"Feature","properties":{{"height":20}},"geometry":{{"type":"Polygon","coordinates":[[[{x0},{y0}],[{x1},{y0}],[{x1},{y1}],[{x0},{y1}],[{x0},{y0}]]]}}}}"#
+                    r#"{{"type":"Feature","properties":{{"height":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x0},{y0}],[{x1},{y0}],[{x1},{y1}],[{x0},{y1}],[{x0},{y0}]]]}}}}"#
                 )
             })
             .collect();
@@ -510,6 +658,47 @@ mod tests {
             "a long segment along the row: {:?}",
             c.vos
         );
+    }
+
+    #[test]
+    fn the_sliced_ceiling_culls_only_what_rule_3_lets_a_vo_as_tall_as_the_row_hide() {
+        // A row 10 m tall at y 130..150 in front of the cell [0, 100]^2; behind it, at y 200
+        // an 8 m and a 30 m box, and at y 400 a 15 m and a 30 m box. A VO just behind the row
+        // (about 152 m from the cell's far edge) is no taller than the row's 8 m above the eyes
+        // (lambda near 1) and allows tops of about 2 + 8 F, F = 1.3 at y 200 and 2.6 at y 400:
+        // 12.4 m and 22.8 m. Farther back, rule 2's perspective lets the row hold taller VOs,
+        // whose F falls as fast: no VO covers a 30 m box.
+        let mut b: Vec<([f64; 4], f64)> = (0..26)
+            .map(|i| {
+                let x = -600.0 + 50.0 * i as f64;
+                ([x, 130.0, x + 50.0, 150.0], 10.0)
+            })
+            .collect();
+        b.push(([40.0, 200.0, 60.0, 215.0], 8.0));
+        b.push(([-20.0, 200.0, 0.0, 215.0], 30.0));
+        b.push(([0.0, 400.0, 30.0, 420.0], 15.0));
+        b.push(([60.0, 400.0, 90.0, 420.0], 30.0));
+        let s = boxes_scene_of(&b);
+        let r = cell(&s);
+        let p = CeilingParams::default();
+        assert_eq!(ceiling_2d(&s, r, &p).culled, vec![26, 27, 28, 29]);
+        let h = Heights {
+            g: 0.0,
+            e0: 1.5,
+            e1: 2.0,
+        };
+        let c = ceiling_sliced(&s, r, h, &p);
+        assert_eq!(c.culled, vec![26, 28], "{c:?}");
+        // Eyes 6 m higher: near the row a VO is at most 2 m above them, and 8 + 2 F at y 400
+        // (about 13.2 m) no longer reaches 15 m; a VO of 4 m above the eyes needs lambda <= 1/2,
+        // a line at y 300 or beyond, where F = 1.33 gives 13.3 m. At y 200, 8 + 2 F still
+        // covers 8 m.
+        let high = Heights {
+            g: 0.0,
+            e0: 7.5,
+            e1: 8.0,
+        };
+        assert_eq!(ceiling_sliced(&s, r, high, &p).culled, vec![26]);
     }
 
     #[test]

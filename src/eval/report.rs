@@ -19,7 +19,9 @@ use crate::runtime::format::{encode_store, CellRecord, Store};
 use crate::runtime::CellId;
 use crate::scene::{self, ReadOptions, Scene};
 
-use super::bound::{ceiling_2d, hidden_2d, BoundParams, CeilingParams};
+use super::bound::{
+    ceiling_2d, ceiling_sliced, hidden_2d, BoundParams, CeilingParams, Heights, SLICES_ABOVE_EYE_M,
+};
 use super::metrics::{
     cell_vs, compare, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
     vo_rays_all, CellEval, Summary,
@@ -360,7 +362,7 @@ pub fn dataset_section(
         sample.len(),
         p.seed
     );
-    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings with the growth generator (chains never leave one object: no fusion); `--generator growth` is the generator before 0.2 (aggregate umbrae grown from seeds); `--effort fast|tight` are the default generator at less and more effort; quantization off evaluates each stored VO's unquantized segment by rule 3. The 2D fusion bound is no bake: it counts as culled every object whose sampled footprint points are cut off, in 2D, from {} points of the cell's boundary by the blockers outside the cell, heights ignored; no VO set of the cell can cull an object outside it, and its \"false culls\" are objects seen over roofs, which heights keep VOs from culling (`src/eval/bound.rs`). The ceiling of 10 ideal VOs is no bake either: on lines at 24 directions every 24 m out to 600 m, the runs hidden in 2D from 16 points of the cell's boundary (sampled every 4 m) are candidates, and 10 are picked greedily by the objects whose boxes lie in their 2D umbra, heights ignored (`eval::bound::ceiling_2d`): what the representation could cull if heights cost nothing. Every variant is checked against the VS seen from the eyes its own store declares: where its ground level for a cell differs from the default bake's (a cell without VOs stores no ground, level 0), that cell's VS is cast again. Machine: {}.\n", BoundParams::default().cell_points, machine());
+    let _ = writeln!(md, "Commands: the default bake with `--slices N`; the baseline bakes VOs from single buildings with the growth generator (chains never leave one object: no fusion); `--generator growth` is the generator before 0.2 (aggregate umbrae grown from seeds); `--effort fast|tight` are the default generator at less and more effort; quantization off evaluates each stored VO's unquantized segment by rule 3. The 2D fusion bound is no bake: it counts as culled every object whose sampled footprint points are cut off, in 2D, from {} points of the cell's boundary by the blockers outside the cell, heights ignored; no VO set of the cell can cull an object outside it, and its \"false culls\" are objects seen over roofs, which heights keep VOs from culling (`src/eval/bound.rs`). The ceiling of 10 ideal VOs is no bake either: on lines at 24 directions every 24 m out to 600 m, the runs hidden in 2D from 16 points of the cell's boundary (sampled every 4 m) are candidates, and 10 are picked greedily by the objects whose boxes lie in their 2D umbra, heights ignored (`eval::bound::ceiling_2d`): what the representation could cull if heights cost nothing. The 2.5D ceiling does the same at VO tops of {:?} m above the highest eye, with the blockers that support such a VO on each line by rule 2 (its bound from the line, ARCHITECTURE.md) and rule 3's heights for the objects (`eval::bound::ceiling_sliced`): what 10 VOs could cull once heights count. Every variant is checked against the VS seen from the eyes its own store declares: where its ground level for a cell differs from the default bake's (a cell without VOs stores no ground, level 0), that cell's VS is cast again. Machine: {}.\n", BoundParams::default().cell_points, SLICES_ABOVE_EYE_M, machine());
     let _ = writeln!(md, "{HEAD} bake ms/cell (median) |\n{RULE}---|");
     let mut speed: Vec<(String, f64, f64)> = Vec::new();
     let sample_main: Vec<CellEval> = eval_cells(&s, &store, &tree, &sample, &vs_sample);
@@ -478,6 +480,36 @@ pub fn dataset_section(
         &mut md,
         "ceiling: 10 ideal VOs in 2D (estimate; not conservative)",
         &sceil,
+        " – |",
+    );
+    // The same in 2.5D, sliced (eval::bound::ceiling_sliced), at the heights the default store
+    // declares for each cell.
+    progress(&format!("{}: ceiling of 10 ideal VOs in 2.5D", d.name));
+    let sliced: Vec<CellEval> = sample
+        .iter()
+        .zip(&vs_sample)
+        .map(|(&id, vs)| {
+            let f = store.frame();
+            let r = f.grid.cell_rect(id).expect("in grid");
+            let ground = store.cell(id).map_or(0, |c| c.ground());
+            let view = f.cell_view(id, ground).expect("in grid");
+            let h = Heights {
+                g: f.ground_z(ground),
+                e0: view.e0,
+                e1: view.e1,
+            };
+            let c = ceiling_sliced(&s, r, h, &cp);
+            let pvs: Vec<u32> = (0..s.objects.len() as u32)
+                .filter(|i| c.culled.binary_search(i).is_err())
+                .collect();
+            compare(&s, id, c.vos.len(), vs, &pvs)
+        })
+        .collect();
+    let ssliced = summarize(&s, &sliced);
+    row(
+        &mut md,
+        "ceiling: 10 ideal VOs in 2.5D, sliced (estimate; not conservative)",
+        &ssliced,
         " – |",
     );
 
