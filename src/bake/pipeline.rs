@@ -429,11 +429,11 @@ impl<'s> Plan<'s> {
         if inside {
             return CellRecord::Skipped;
         }
-        // Blockers that may support a VO: near, apart from the cell, standing from below the
-        // lowest eye (rule 2: base <= e0 - lambda (e0 - g)) to above the eyes.
+        // Blockers that may support a VO: near, apart from the cell, standing from the ground
+        // (rule 2: base <= min(e0, g)) to above the eyes.
         let near: Vec<u32> = umbra::usable(&cell, &self.set, &self.params.grow)
             .into_iter()
-            .filter(|&i| self.base[i as usize] <= e0 && self.top[i as usize] > e1)
+            .filter(|&i| self.base[i as usize] <= g.min(e0) && self.top[i as usize] > e1)
             .collect();
         if near.is_empty() {
             return CellRecord::EMPTY;
@@ -639,45 +639,20 @@ impl<'s> Plan<'s> {
         };
         let mut t = Instant::now();
         let mut all_props: Vec<(u8, DVec2, DVec2)> = Vec::new();
-        // Bands of line offsets from the cell centre: the blockers of a band's map are those that
-        // support the slice's height by rule 2 at the band's least distance from the cell, so
-        // near blockers lower than the slice hide far proposals (perspective).
-        let half_diag = 0.5 * (cell[2] - cell[0]).length();
-        let bands = [(0.0, 200.0), (200.0, 400.0), (400.0, f64::INFINITY)];
         for &k in &stats.levels.clone() {
             let h = levels[k as usize];
-            let mut previous: Option<(Vec<u32>, super::hidden::HiddenMap)> = None;
-            for &(lo, hi) in &bands {
-                let floor = lo - half_diag;
-                let ids: Vec<u32> = near
-                    .iter()
-                    .zip(support)
-                    .filter(|(_, s)| {
-                        let lambda = if floor > 0.0 {
-                            (s.d_far / floor).min(1.0)
-                        } else {
-                            1.0
-                        };
-                        s.top >= e1 + lambda * (h - e1)
-                    })
-                    .map(|(&i, _)| i)
-                    .collect();
-                let map = match previous.take() {
-                    Some((prev, map)) if prev == ids => map,
-                    _ => {
-                        let edges = self.twins.boundary_edges(&self.set.polys, &ids);
-                        super::hidden::HiddenMap::build(cell, &edges, &self.params.map)
-                    }
-                };
-                stats.stage_ms[0] += clock(&mut t);
-                let mut pp = self.params.propose;
-                pp.min_offset = lo;
-                pp.max_offset = pp.max_offset.min(hi - 1e-9);
-                let props = super::propose::runs(cell, &map, &pp);
-                stats.stage_ms[1] += clock(&mut t);
-                all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
-                previous = Some((ids, map));
-            }
+            let ids: Vec<u32> = near
+                .iter()
+                .zip(support)
+                .filter(|(_, s)| s.top >= h)
+                .map(|(&i, _)| i)
+                .collect();
+            let edges = self.twins.boundary_edges(&self.set.polys, &ids);
+            let map = super::hidden::HiddenMap::build(cell, &edges, &self.params.map);
+            stats.stage_ms[0] += clock(&mut t);
+            let props = super::propose::runs(cell, &map, &self.params.propose);
+            stats.stage_ms[1] += clock(&mut t);
+            all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
         }
         // The same segment proposed at several levels: the highest (its map says hidden
         // there, and a taller VO hides at least as much).

@@ -31,9 +31,6 @@ pub struct ProposeParams {
     pub spacing: f64,
     /// Sampling step along a line in the scan, in pixels of the map.
     pub step: usize,
-    /// Nearest line from the cell centre that is scanned, metres (lines also stay a spacing clear
-    /// of the cell).
-    pub min_offset: f64,
     /// Farthest line from the cell centre, metres.
     pub max_offset: f64,
     /// Shortest run kept, metres.
@@ -48,7 +45,6 @@ impl Default for ProposeParams {
             directions: 16,
             spacing: 32.0,
             step: 2,
-            min_offset: 0.0,
             max_offset: 900.0,
             min_len: 60.0,
             per_direction: 1,
@@ -173,11 +169,7 @@ pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Propos
     for j in 0..p.directions {
         let phi = std::f64::consts::TAU * j as f64 / p.directions as f64;
         let mut best: Vec<(Line, Proposal)> = Vec::new();
-        let clear = half_w * (phi.cos().abs() + phi.sin().abs()) + p.spacing;
-        let mut o = clear;
-        if p.min_offset > clear {
-            o += ((p.min_offset - clear) / p.spacing).ceil() * p.spacing;
-        }
+        let mut o = half_w * (phi.cos().abs() + phi.sin().abs()) + p.spacing;
         while o <= p.max_offset {
             let l = Line { phi, o };
             found.clear();
