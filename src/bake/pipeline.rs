@@ -429,11 +429,11 @@ impl<'s> Plan<'s> {
         if inside {
             return CellRecord::Skipped;
         }
-        // Blockers that may support a VO: near, apart from the cell, standing from the ground
-        // (rule 2: base <= min(e0, g)) to above the eyes.
+        // Blockers that may support a VO: near, apart from the cell, standing from below the
+        // lowest eye (rule 2: base <= e0 - lambda (e0 - g)) to above the eyes.
         let near: Vec<u32> = umbra::usable(&cell, &self.set, &self.params.grow)
             .into_iter()
-            .filter(|&i| self.base[i as usize] <= g.min(e0) && self.top[i as usize] > e1)
+            .filter(|&i| self.base[i as usize] <= e0 && self.top[i as usize] > e1)
             .collect();
         if near.is_empty() {
             return CellRecord::EMPTY;
