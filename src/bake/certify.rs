@@ -5,12 +5,18 @@
 //! Output: a [`Certified`] VO: its 5 stored bytes, the dequantized geometry the runtime will
 //! read, and the hidden part of the proposal it came from; or `None`.
 //! Rule: the blockers that support the VO by rule 2 (for its own `d_near`) go to the exact
-//! verifier ([`Verifier::hidden_parts`]), which returns the certified hidden pieces of the
-//! proposal; the longest is quantized ([`quantize`]), and every quantized candidate is checked
-//! again from its dequantized form: rule 2 for the dequantized segment, then the verifier on the
-//! blockers that pass. When rule 2 leaves too few blockers at the proposal's level, lower levels
-//! are tried. A stored VO is then raised while rule 2 still holds, first by the band's bound,
-//! then by the tighter bound for its own segment.
+//! verifier ([`Verifier::hidden_parts_by`]), which returns the certified hidden pieces of the
+//! proposal, each with the blockers its certificates use; the piece is quantized ([`quantize`]),
+//! and every quantized candidate is checked again from its dequantized form: rule 2 for the
+//! dequantized segment, then either the exact test that it lies in the closed umbra of the
+//! certified piece ([`point_in_umbra`] at both ends: every segment from the cell to it then
+//! crosses the piece, so the piece's blockers hide it too, and each ray's crossing with them
+//! comes at a smaller fraction of its length), or the verifier on the blockers that pass. When
+//! rule 2 leaves too few blockers at the proposal's level, lower levels are tried. A stored VO is
+//! then raised: to the highest level that every blocker of its certificates supports for this
+//! very segment (rule 2's tighter bounds; those blockers alone hide it), then, while a verifier
+//! over the blockers that support the next level for this segment certifies it, again to what
+//! the blockers of that certificate support.
 //! Invariant: what is returned passed rule 2 and the exact verifier in exactly the form the
 //! runtime decodes (ARCHITECTURE.md invariant 10).
 
@@ -18,6 +24,7 @@ use glam::DVec2;
 
 use super::quantize::{quantize, Refused};
 use super::slice::{d_near, line_lambda, Support};
+use crate::geom::predicates::point_in_umbra;
 use crate::geom::verify::Verifier;
 use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
@@ -35,8 +42,9 @@ pub struct Certifier<'a> {
     pub heights: (f64, f64, f64),
     /// Usable blockers: polygon and rule-2 support.
     pub blockers: Vec<(&'a [DVec2], Support)>,
-    /// One verifier per height level and distance band, built when first needed.
-    pub verifiers: Vec<std::cell::OnceCell<Verifier<'a>>>,
+    /// One verifier per height level and distance band, built when first needed, with the
+    /// index in `blockers` of each of its blockers.
+    pub verifiers: Vec<std::cell::OnceCell<(Verifier<'a>, Vec<u32>)>>,
 }
 
 /// A stored VO and where it came from.
@@ -64,8 +72,6 @@ pub struct CertifyStats {
     pub checks: usize,
     /// Levels a stored VO was raised by after quantization.
     pub raised: usize,
-    /// Of those, raised by rule 2's tighter bound ([`Support::supports_beside`]).
-    pub raised_beside: usize,
     /// Length proposed and length certified (all its pieces of at least [`MIN_PIECE_M`]), metres.
     pub proposed_m: f64,
     pub certified_m: f64,
@@ -96,60 +102,54 @@ impl<'a> Certifier<'a> {
     /// (for band 0, wherever it stands: the ratio at its cap of 1, `t >= h`). Rule 2's bound
     /// only falls as the VO's distance grows, so these blockers support every VO of the band,
     /// and one verifier, with the certificates it caches, serves all of them.
-    fn verifier(&self, level: u8, band: usize) -> &Verifier<'a> {
+    fn verifier(&self, level: u8, band: usize) -> &(Verifier<'a>, Vec<u32>) {
         self.verifiers[level as usize * BANDS + band].get_or_init(|| {
             let (e0, e1, g) = self.heights;
             let h = self.frame.vo_top(e1, level);
             let dn = band_floor(band).max(f64::MIN_POSITIVE);
-            Verifier::new(
-                self.cell,
-                self.blockers
-                    .iter()
-                    .filter(|(_, s)| s.supports(e0, e1, g, h, dn))
-                    .map(|(p, _)| *p),
-            )
-            // Pieces shorter than MIN_PIECE_M are dropped anyway.
-            .with_max_step(0.5 * MIN_PIECE_M)
+            let ids: Vec<u32> = (0..self.blockers.len() as u32)
+                .filter(|&i| self.blockers[i as usize].1.supports(e0, e1, g, h, dn))
+                .collect();
+            let v = Verifier::new(self.cell, ids.iter().map(|&i| self.blockers[i as usize].0))
+                // Pieces shorter than MIN_PIECE_M are dropped anyway.
+                .with_max_step(0.5 * MIN_PIECE_M)
+                .with_min_step(MIN_STEP_M);
+            (v, ids)
         })
     }
 
-    /// Whether VO `a`–`b` at `level` is certified hidden over the blockers that support it by
-    /// rule 2's tighter bound ([`Support::supports_beside`], with the segment's own distances),
-    /// in a verifier of its own. Only blockers meeting the box of the cell and the segment can
-    /// meet a segment between them; when the tighter bound admits none beyond the band's
-    /// (`band_set`), the band's verifier has already answered and the sweep is skipped.
-    fn hidden_beside(&self, level: u8, band: usize, a: DVec2, b: DVec2) -> bool {
+    /// For each blocker that may meet a segment from the cell to `a`–`b` (its box meets the box
+    /// of both), the highest level at which it supports a VO on `a`–`b` by rule 2 with the
+    /// tighter bounds for that segment ([`Support::supports_beside`]), when it supports one.
+    /// Keyed by index into `blockers`, ascending (a `BTreeMap`: the verifiers built from it list
+    /// their blockers in a fixed order).
+    fn levels_beside(&self, a: DVec2, b: DVec2) -> std::collections::BTreeMap<u32, u8> {
         let (e0, e1, g) = self.heights;
-        let h = self.frame.vo_top(e1, level);
         let dn = d_near(self.cell, &[a, b]);
         let (lo, hi) = self
             .cell
             .iter()
             .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
-        let floor = band_floor(band).max(f64::MIN_POSITIVE);
-        let mut new = false;
-        let used: Vec<&[DVec2]> = self
-            .blockers
-            .iter()
-            .filter(|(p, _)| {
-                let (pl, ph) = p
-                    .iter()
-                    .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(l, u), v| {
-                        (l.min(*v), u.max(*v))
-                    });
-                pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y
-            })
-            .filter(|(p, s)| {
-                let line = line_lambda(self.cell, p, a, b);
-                let ok = s.supports_beside(e0, e1, g, h, dn, d_near(p, &[a, b]), line);
-                new |= ok && !s.supports(e0, e1, g, h, floor);
-                ok
-            })
-            .map(|(p, _)| *p)
-            .collect();
-        new && Verifier::new(self.cell, used)
-            .with_max_step(0.5 * MIN_PIECE_M)
-            .is_hidden(a, b)
+        let mut out = std::collections::BTreeMap::new();
+        for (i, &(p, s)) in self.blockers.iter().enumerate() {
+            let (pl, ph) = p
+                .iter()
+                .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(l, u), v| {
+                    (l.min(*v), u.max(*v))
+                });
+            if !(pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y) {
+                continue;
+            }
+            let line = line_lambda(self.cell, p, a, b);
+            let dbs = d_near(p, &[a, b]);
+            let top = (1..HEIGHT_LEVELS)
+                .rev()
+                .find(|&l| s.supports_beside(e0, e1, g, self.frame.vo_top(e1, l), dn, dbs, line));
+            if let Some(l) = top {
+                out.insert(i as u32, l);
+            }
+        }
+        out
     }
 
     /// The band a segment belongs to, and the check that it does (rounding-safe: the band is
@@ -167,15 +167,16 @@ impl<'a> Certifier<'a> {
         let band = self.band(a, b, 0.0);
         for level in (1..=level).rev().take(LEVEL_FALLBACKS) {
             stats.checks += 1;
-            let mut out: Vec<Piece> = self
-                .verifier(level, band)
-                .hidden_parts(a, b)
+            let (v, ids) = self.verifier(level, band);
+            let mut out: Vec<Piece> = v
+                .hidden_parts_by(a, b)
                 .into_iter()
-                .filter(|p| p.p0.distance(p.p1) >= MIN_PIECE_M)
-                .map(|p| Piece {
+                .filter(|(p, _)| p.p0.distance(p.p1) >= MIN_PIECE_M)
+                .map(|(p, used)| Piece {
                     level,
                     a: p.p0,
                     b: p.p1,
+                    used: used.iter().map(|&k| ids[k as usize]).collect(),
                 })
                 .collect();
             if !out.is_empty() {
@@ -201,7 +202,9 @@ impl<'a> Certifier<'a> {
         let in_band = |qa: DVec2, qb: DVec2| d_near(self.cell, &[qa, qb]) >= floor;
         for (n, level) in (1..=piece.level).rev().take(LEVEL_FALLBACKS).enumerate() {
             let mut checks = 0;
-            let v = self.verifier(level, band);
+            let (v, ids) = self.verifier(level, band);
+            // The blockers that certified the last quantized candidate checked: the one kept.
+            let mut used: Vec<u32> = Vec::new();
             let r = quantize(
                 f,
                 self.id,
@@ -211,7 +214,26 @@ impl<'a> Certifier<'a> {
                 piece.b,
                 |qa, qb| {
                     checks += 1;
-                    in_band(qa, qb) && v.is_hidden(qa, qb)
+                    if !in_band(qa, qb) {
+                        return false;
+                    }
+                    // Behind the certified piece: hidden by the piece's blockers (module
+                    // header), no sweep needed.
+                    if !piece.used.is_empty()
+                        && [qa, qb]
+                            .iter()
+                            .all(|&x| point_in_umbra(self.cell, piece.a, piece.b, x))
+                    {
+                        used = piece.used.clone();
+                        return true;
+                    }
+                    match v.hidden_by(qa, qb) {
+                        Some(u) => {
+                            used = u.iter().map(|&k| ids[k as usize]).collect();
+                            true
+                        }
+                        None => false,
+                    }
                 },
             );
             stats.checks += checks;
@@ -222,28 +244,46 @@ impl<'a> Certifier<'a> {
                     if n > 0 || checks > 1 {
                         stats.shrunk += 1;
                     }
+                    // Raised to the highest level that every blocker its certificates use
+                    // supports for this very segment: those blockers alone hide it (the
+                    // verifier's `hidden_by`), so rule 2 holds over them at that level.
+                    // Then, while a verifier over the blockers that support the next level for
+                    // this very segment certifies it, to the highest level the blockers of that
+                    // certificate support.
                     let (qa, qb) = (DVec2::from(geom.a), DVec2::from(geom.b));
+                    let start = q.level;
+                    let tops = self.levels_beside(qa, qb);
+                    let top_of = |used: &[u32]| {
+                        used.iter()
+                            .map(|&i| tops.get(&i).copied().unwrap_or(0))
+                            .min()
+                            .unwrap_or(0)
+                    };
+                    q.level = q.level.max(top_of(&used));
                     while q.level + 1 < HEIGHT_LEVELS {
+                        let next = q.level + 1;
+                        let ids: Vec<u32> = tops
+                            .iter()
+                            .filter(|(_, &l)| l >= next)
+                            .map(|(&i, _)| i)
+                            .collect();
                         stats.checks += 1;
-                        if !self.verifier(q.level + 1, band).is_hidden(qa, qb) {
-                            break;
+                        let v = Verifier::new(
+                            self.cell,
+                            ids.iter().map(|&i| self.blockers[i as usize].0),
+                        )
+                        .with_max_step(0.5 * MIN_PIECE_M);
+                        match v.hidden_by(qa, qb) {
+                            Some(u) => {
+                                let u: Vec<u32> = u.iter().map(|&k| ids[k as usize]).collect();
+                                q.level = next.max(top_of(&u));
+                            }
+                            None => break,
                         }
-                        q.level += 1;
-                        geom = f.dequantize(self.id, self.ground, &q)?;
-                        stats.raised += 1;
                     }
-                    // Then by rule 2's tighter bound, over the blockers that support this very
-                    // segment where they stand (a verifier of its own: its blockers hold for
-                    // this segment, not for its band).
-                    while q.level + 1 < HEIGHT_LEVELS {
-                        stats.checks += 1;
-                        if !self.hidden_beside(q.level + 1, band, qa, qb) {
-                            break;
-                        }
-                        q.level += 1;
+                    if q.level > start {
+                        stats.raised += (q.level - start) as usize;
                         geom = f.dequantize(self.id, self.ground, &q)?;
-                        stats.raised += 1;
-                        stats.raised_beside += 1;
                     }
                     return Some(Certified {
                         q,
@@ -261,11 +301,16 @@ impl<'a> Certifier<'a> {
 
 /// Shortest certified piece kept as a candidate, metres.
 pub const MIN_PIECE_M: f64 = 8.0;
+/// Where a certified piece begins after a visible gap is sought to within this, metres: far
+/// below the 4 m grid the stored ends snap to at 100 m cells.
+pub const MIN_STEP_M: f64 = 0.5;
 
-/// A certified hidden piece of a proposal, at a height level.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A certified hidden piece of a proposal, at a height level, with the blockers (indices into
+/// [`Certifier::blockers`]) whose certificates hide it.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
     pub level: u8,
     pub a: DVec2,
     pub b: DVec2,
+    pub used: Vec<u32>,
 }

@@ -674,10 +674,35 @@ impl<'s> Plan<'s> {
                 h: levels[k as usize],
             };
             let hid = self.occludees.hidden(&view, &geom, radius);
-            if !hid.is_empty() {
-                cands.push((k, a, b));
-                hidden.push(hid);
+            if hid.is_empty() {
+                continue;
             }
+            // Trimmed to the part that the objects it hides need: the exact certification then
+            // sweeps only that. A box lies in the umbra of a sub-segment exactly when every
+            // segment from the cell to it crosses the line within that sub-segment, and rule 3's
+            // heights depend on the line only, so the trimmed segment hides what this one does
+            // (up to rounding; it is weighed again).
+            let (a, b, hid) = match trim(
+                cell,
+                a,
+                b,
+                hid.iter().map(|&o| &self.occludees.boxes[o as usize]),
+            ) {
+                Some((ta, tb)) if (ta, tb) != (a, b) => {
+                    let g = crate::runtime::frame::VoGeom {
+                        a: ta.to_array(),
+                        b: tb.to_array(),
+                        ..geom
+                    };
+                    (ta, tb, self.occludees.hidden(&view, &g, radius))
+                }
+                _ => (a, b, hid),
+            };
+            if hid.is_empty() {
+                continue;
+            }
+            cands.push((k, a, b));
+            hidden.push(hid);
         }
         stats.stage_ms[2] += clock(&mut t);
         stats.dense = cands.len();
@@ -699,7 +724,7 @@ impl<'s> Plan<'s> {
         let mut cs = super::certify::CertifyStats::default();
         use super::certify::Piece;
         use super::select::{select, Candidate, Stage};
-        #[derive(Clone, Copy)]
+        #[derive(Clone)]
         enum Vo {
             Piece(Piece),
             Stored(QVo, crate::runtime::frame::VoGeom),
@@ -715,7 +740,12 @@ impl<'s> Plan<'s> {
             .zip(hidden)
             .map(|(&(level, a, b), hidden)| Candidate {
                 stage: Stage::Proposed,
-                value: Vo::Piece(Piece { level, a, b }),
+                value: Vo::Piece(Piece {
+                    level,
+                    a,
+                    b,
+                    used: Vec::new(),
+                }),
                 hidden,
             })
             .collect();
@@ -724,20 +754,20 @@ impl<'s> Plan<'s> {
             &self.occludees.cost,
             self.params.max_vos,
             self.params.budget,
-            |c| match c.value {
+            |c| match &c.value {
                 Vo::Piece(p) if c.stage == Stage::Proposed => certifier
                     .pieces(p.level, p.a, p.b, &mut cs)
                     .into_iter()
                     .map(|p| Candidate {
                         stage: Stage::Certified,
-                        value: Vo::Piece(p),
                         hidden: self
                             .occludees
                             .hidden(&view, &geom(p.level, p.a, p.b), radius),
+                        value: Vo::Piece(p),
                     })
                     .collect(),
                 Vo::Piece(p) => certifier
-                    .store(&p, &mut cs)
+                    .store(p, &mut cs)
                     .map(|s| Candidate {
                         stage: Stage::Stored,
                         value: Vo::Stored(s.q, geom(p.level, p.a, p.b)),
@@ -784,6 +814,75 @@ impl<'s> Plan<'s> {
             .map(|&(i, _)| self.set.polys[i as usize].as_slice());
         Verifier::new(cell, used).is_hidden(a, b)
     }
+}
+
+/// Margin kept beyond the crossings [`trim`] finds, metres.
+const TRIM_MARGIN_M: f64 = 0.05;
+/// Share of the trimmed length kept on either side beyond it.
+const TRIM_EXTRA: f64 = 0.25;
+
+/// The part of the segment `a`–`b` that segments from the rectangle `cell` to the footprints of
+/// `boxes` (lying beyond its line) cross, with [`TRIM_MARGIN_M`] on each side and its ends
+/// snapped outwards to the VO grid; `None` when the line meets the cell or a box is not wholly
+/// beyond it. The crossings of the segments between corners bound all others (the cell and the
+/// footprints are convex, and the crossing point moves monotonically along each).
+fn trim<'b>(
+    cell: &[DVec2; 4],
+    a: DVec2,
+    b: DVec2,
+    boxes: impl Iterator<Item = &'b [f64; 6]>,
+) -> Option<(DVec2, DVec2)> {
+    let len = a.distance(b);
+    if !(len > 0.0) {
+        return None;
+    }
+    let u = (b - a) / len;
+    let mut n = u.perp();
+    if n.dot(cell[0] - a) > 0.0 {
+        n = -n;
+    }
+    // Cell corners at (t, s) with s < 0 on the cell's side.
+    let cs: Vec<(f64, f64)> = cell.iter().map(|&c| (u.dot(c - a), n.dot(c - a))).collect();
+    if cs.iter().any(|&(_, s)| !(s < 0.0)) {
+        return None;
+    }
+    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for bx in boxes {
+        for w in [
+            DVec2::new(bx[0], bx[1]),
+            DVec2::new(bx[3], bx[1]),
+            DVec2::new(bx[3], bx[4]),
+            DVec2::new(bx[0], bx[4]),
+        ] {
+            let (tw, sw) = (u.dot(w - a), n.dot(w - a));
+            if !(sw > 0.0) {
+                return None;
+            }
+            for &(tc, sc) in &cs {
+                let t = tc + (tw - tc) * (-sc) / (sw - sc);
+                t0 = t0.min(t);
+                t1 = t1.max(t);
+            }
+        }
+    }
+    let extra = TRIM_EXTRA * (t1 - t0) + TRIM_MARGIN_M;
+    let (t0, t1) = ((t0 - extra).max(0.0), (t1 + extra).min(len));
+    if !(t0 < t1) {
+        return None;
+    }
+    let out = |t: f64, toward: f64| {
+        if t <= 0.0 {
+            a
+        } else if t >= len {
+            b
+        } else {
+            // Snapped along the segment, away from its middle.
+            let g = super::propose::VO_GRID_M;
+            let p = a + u * (t + toward * g);
+            (p / g).round() * g
+        }
+    };
+    Some((out(t0, -1.0), out(t1, 1.0)))
 }
 
 /// Bakes `cells` in parallel on the current rayon pool; `progress(done)` is called as cells

@@ -279,6 +279,30 @@ pub fn segment_meets_convex(a: DVec2, b: DVec2, poly: &[DVec2]) -> bool {
     })
 }
 
+/// Exact test: does the point `p` lie in the closed umbra of the segment `[a, b]` seen from the
+/// convex polygon `cell` (counter-clockwise): does every closed segment from a point of `cell`
+/// to `p` meet `[a, b]`? `false` when the line of `[a, b]` meets the cell (its umbra is then
+/// taken as empty).
+///
+/// With the cell strictly on one side of the line, the cell points whose segment to `p` (on the
+/// line or beyond it) meets `[a, b]` form the closed cone from `p` through `[a, b]`, which is
+/// convex: the whole cell lies in it exactly when its vertices do, i.e. when each vertex `c` sees
+/// `p` between its rays to `a` and `b` (cell on the left of `a -> b`: `orient(c, a, p)` and
+/// `orient(c, p, b)` not clockwise).
+pub fn point_in_umbra(cell: &[DVec2], a: DVec2, b: DVec2, p: DVec2) -> bool {
+    use Orientation::*;
+    let (a, b) = match cell.first().map(|&c| orient(a, b, c)) {
+        Some(Ccw) => (a, b),
+        Some(Cw) => (b, a),
+        _ => return false,
+    };
+    if cell.iter().any(|&c| orient(a, b, c) != Ccw) || orient(a, b, p) == Ccw {
+        return false;
+    }
+    cell.iter()
+        .all(|&c| orient(c, a, p) != Cw && orient(c, p, b) != Cw)
+}
+
 /// The extreme vertices of a convex polygon as seen from a point outside it: `(l, r)` with every
 /// vertex `v` satisfying `orient(q, l, v) != Cw` and `orient(q, v, r) != Cw`, so the polygon is
 /// seen within the counter-clockwise angle from the direction of `poly[l]` to that of `poly[r]`
@@ -427,6 +451,33 @@ pub fn common_tangents(p: &[DVec2], q: &[DVec2]) -> CommonTangents {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn umbra_of_a_segment_seen_from_a_cell() {
+        let cell = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(10.0, 0.0),
+            DVec2::new(10.0, 10.0),
+            DVec2::new(0.0, 10.0),
+        ];
+        let (a, b) = (DVec2::new(-20.0, 20.0), DVec2::new(30.0, 20.0));
+        for (p, inside) in [
+            (DVec2::new(5.0, 30.0), true),
+            (DVec2::new(5.0, 20.0), true),    // on the segment
+            (DVec2::new(-20.0, 20.0), true),  // its end
+            (DVec2::new(5.0, 15.0), false),   // in front
+            (DVec2::new(45.0, 30.0), false),  // beside: corner (10, 0) sees it past b
+            (DVec2::new(40.0, 30.0), true),   // on that corner's ray through b (closed)
+            (DVec2::new(-30.0, 30.0), true),  // on corner (0, 0)'s ray through a (closed)
+            (DVec2::new(-31.0, 30.0), false), // just outside it
+        ] {
+            assert_eq!(point_in_umbra(&cell, a, b, p), inside, "{p}");
+            assert_eq!(point_in_umbra(&cell, b, a, p), inside, "{p} (reversed)");
+        }
+        // A segment whose line meets the cell has no umbra.
+        let (c, d) = (DVec2::new(5.0, -10.0), DVec2::new(5.0, 40.0));
+        assert!(!point_in_umbra(&cell, c, d, DVec2::new(20.0, 5.0)));
+    }
 
     fn v(x: f64, y: f64) -> DVec2 {
         DVec2::new(x, y)

@@ -75,6 +75,10 @@
 //! condition holds at both ends, so the certificate holds there (Lemma 2); and on `[m, p]`.
 //! Likewise, a piece from a point of one blocker to a point of another is in their union when it
 //! meets a segment between two vertices that both contain (a shared edge of two pieces).
+//! The blockers a certificate uses (its links', or the one or two blockers a piece lies in) are
+//! reported with the piece ([`Verifier::hidden_by`], [`Verifier::hidden_parts_by`]): every
+//! segment from the cell to a point of the piece meets one of them, which is what rule 2 needs
+//! of a VO's supporters.
 //! Certificates found are kept per verifier (bucketed by position) and tried first at later
 //! points nearby; a cached certificate is checked exactly like a new one, so the cache saves
 //! searching and decides nothing.
@@ -333,13 +337,17 @@ pub struct Verifier<'a> {
     cache: std::cell::RefCell<CertCache>,
     /// Longest step past points the sweep cannot certify, metres ([`MAX_STEP_M`]).
     max_step_m: f64,
+    /// Least step past a point it cannot certify, and the precision to which the end of a
+    /// hidden part is sought, metres ([`MIN_PIECE_M`]).
+    min_step_m: f64,
 }
 
 /// Certificates (their conditions) by where they held: each is listed in the buckets of the
 /// bounding box of the piece it certified, grown by [`CACHE_REACH_M`].
 #[derive(Default)]
 struct CertCache {
-    certs: Vec<Vec<Cond>>,
+    /// Each certificate's conditions and the blockers (verifier indices) its chords lie in.
+    certs: Vec<(Vec<Cond>, Vec<u32>)>,
     buckets: std::collections::HashMap<(i64, i64), Vec<u32>>,
 }
 
@@ -380,9 +388,9 @@ impl CertCache {
         )
     }
 
-    fn add(&mut self, conds: Vec<Cond>, p0: DVec2, p1: DVec2) {
+    fn add(&mut self, conds: Vec<Cond>, used: Vec<u32>, p0: DVec2, p1: DVec2) {
         let id = self.certs.len() as u32;
-        self.certs.push(conds);
+        self.certs.push((conds, used));
         let r = DVec2::splat(CACHE_REACH_M);
         let (lo, hi) = (Self::key(p0.min(p1) - r), Self::key(p0.max(p1) + r));
         // Long pieces are listed along their length only (at most 64 buckets).
@@ -408,14 +416,14 @@ impl CertCache {
     /// The cached certificates that hold at every point of `pts` (newest first), if any.
     /// Of the newest [`CACHE_TRIES`] certificates listed where `q` is, one that holds at `q`
     /// and `p` and reaches furthest towards `b` ([`reach`]), with that reach.
-    fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(&[Cond], f64)> {
+    fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(&(Vec<Cond>, Vec<u32>), f64)> {
         let ids = self.buckets.get(&Self::key(q))?;
         ids.iter()
             .rev()
             .take(CACHE_TRIES)
-            .map(|&i| self.certs[i as usize].as_slice())
-            .filter(|c| [q, p].iter().all(|&x| c.iter().all(|k| k.holds(x))))
-            .map(|c| (c, reach(c, q, b)))
+            .map(|&i| &self.certs[i as usize])
+            .filter(|c| [q, p].iter().all(|&x| c.0.iter().all(|k| k.holds(x))))
+            .map(|c| (c, reach(&c.0, q, b)))
             .max_by(|x, y| x.1.total_cmp(&y.1))
     }
 }
@@ -487,13 +495,24 @@ impl<'a> Verifier<'a> {
             grid,
             cache: Default::default(),
             max_step_m: MAX_STEP_M,
+            min_step_m: MIN_PIECE_M,
         }
     }
 
     /// This verifier, stepping at most `m` metres past points it cannot certify (it may then
     /// miss hidden parts shorter than `m` between visible ones: it certifies less, never more).
     pub fn with_max_step(mut self, m: f64) -> Self {
-        self.max_step_m = m.max(MIN_PIECE_M);
+        self.max_step_m = m.max(self.min_step_m);
+        self
+    }
+
+    /// This verifier, stepping at least `m` metres past a point it cannot certify and seeking
+    /// where a hidden part begins to within `m` (default [`MIN_PIECE_M`]): it may then report a
+    /// hidden part up to `m` shorter at its start than a finer search would, which certifies
+    /// less, never more, for far fewer searches at the edges of visible gaps.
+    pub fn with_min_step(mut self, m: f64) -> Self {
+        self.min_step_m = m.max(MIN_PIECE_M);
+        self.max_step_m = self.max_step_m.max(self.min_step_m);
         self
     }
 
@@ -572,24 +591,45 @@ impl<'a> Verifier<'a> {
     /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
     pub fn hidden_parts(&self, a: DVec2, b: DVec2) -> Vec<Hidden> {
         self.sweep(a, b, false)
+            .into_iter()
+            .map(|(h, _)| h)
+            .collect()
+    }
+
+    /// [`Self::hidden_parts`], each with the blockers its certificates use (indices into this
+    /// verifier's blockers, ascending; see [`Self::hidden_by`]).
+    pub fn hidden_parts_by(&self, a: DVec2, b: DVec2) -> Vec<(Hidden, Vec<u32>)> {
+        self.sweep(a, b, false)
     }
 
     /// True when the whole closed segment `[a, b]` is certified hidden: the same sweep as
     /// [`Self::hidden_parts`], stopping at the first point it cannot certify.
     pub fn is_hidden(&self, a: DVec2, b: DVec2) -> bool {
-        let parts = self.sweep(a, b, true);
-        matches!(parts[..], [h] if h.p0 == a && h.p1 == b)
+        self.hidden_by(a, b).is_some()
     }
 
-    fn sweep(&self, a: DVec2, b: DVec2, stop_at_gap: bool) -> Vec<Hidden> {
-        let mut out: Vec<Hidden> = Vec::new();
+    /// When the whole closed segment `[a, b]` is certified hidden ([`Self::is_hidden`]), the
+    /// blockers its certificates use (indices into this verifier's blockers, ascending): every
+    /// segment from the cell to a point of `[a, b]` meets one of them (Lemma 1 and the pieces
+    /// inside blockers, module header), so a VO on `[a, b]` is hidden by them alone.
+    pub fn hidden_by(&self, a: DVec2, b: DVec2) -> Option<Vec<u32>> {
+        let mut parts = self.sweep(a, b, true);
+        match parts[..] {
+            [(h, _)] if h.p0 == a && h.p1 == b => parts.pop().map(|(_, used)| used),
+            _ => None,
+        }
+    }
+
+    /// The certified pieces, each with the blockers its certificates use.
+    fn sweep(&self, a: DVec2, b: DVec2, stop_at_gap: bool) -> Vec<(Hidden, Vec<u32>)> {
+        let mut out: Vec<(Hidden, Vec<u32>)> = Vec::new();
         let len = a.distance(b);
         if !(len > 0.0 && len.is_finite()) {
             return out;
         }
         let par = Param { a, b, d: b - a };
         let steps = |m: f64| ((m / len * END as f64) as u64).clamp(1, END);
-        let (min_step, probe) = (steps(MIN_PIECE_M), steps(PROBE_M));
+        let (min_step, probe) = (steps(self.min_step_m), steps(PROBE_M));
         let max_step = steps(self.max_step_m);
         let mut j = 0u64;
         let mut gap = min_step;
@@ -607,7 +647,7 @@ impl<'a> Verifier<'a> {
             // Stepping on doubles the step, so the first certified point may lie far past the
             // start of the hidden part: bisect back towards the last failure, down to the
             // least step.
-            if let (Some(_), Some(mut lo)) = (found, failed) {
+            if let (true, Some(mut lo)) = (found.is_some(), failed) {
                 while j - lo > min_step {
                     let Some((mid, qm)) = par.at_or_below(lo + (j - lo) / 2, lo) else {
                         break;
@@ -620,18 +660,24 @@ impl<'a> Verifier<'a> {
             }
             failed = None;
             match found {
-                Some((e, pe)) => {
+                Some((e, pe, used)) => {
                     match out.last_mut() {
-                        Some(h) if h.p1 == q => {
+                        Some((h, all)) if h.p1 == q => {
                             h.t1 = e as f64 / END as f64;
                             h.p1 = pe;
+                            all.extend(used);
+                            all.sort_unstable();
+                            all.dedup();
                         }
-                        _ => out.push(Hidden {
-                            t0: j as f64 / END as f64,
-                            t1: e as f64 / END as f64,
-                            p0: q,
-                            p1: pe,
-                        }),
+                        _ => out.push((
+                            Hidden {
+                                t0: j as f64 / END as f64,
+                                t1: e as f64 / END as f64,
+                                p0: q,
+                                p1: pe,
+                            },
+                            used,
+                        )),
                     }
                     j = e;
                     gap = min_step;
@@ -669,14 +715,14 @@ impl<'a> Verifier<'a> {
     }
 
     /// The longest certified piece `[j, e]` the sweep finds from the point `q` at parameter
-    /// `j`: its end parameter and point.
+    /// `j`: its end parameter and point, and the blockers its certificate uses.
     fn piece_from(
         &self,
         par: &Param,
         (j, q): (u64, DVec2),
         probe: u64,
         cache: &mut NearCache<'a>,
-    ) -> Option<(u64, DVec2)> {
+    ) -> Option<(u64, DVec2, Vec<u32>)> {
         // The probe point: the next exact point at least `probe` on (further when exact points
         // are sparse, far from the origin).
         let mut step = probe.max(1);
@@ -701,17 +747,17 @@ impl<'a> Verifier<'a> {
         (j, q): (u64, DVec2),
         (k, p): (u64, DVec2),
         cache: &mut NearCache<'a>,
-    ) -> Option<(u64, DVec2)> {
+    ) -> Option<(u64, DVec2, Vec<u32>)> {
         // A certificate found before that holds here (it proves the piece as well as a new one).
         let remaining = q.distance(par.b);
         let cached = self
             .cache
             .borrow()
             .find(q, p, par.b)
-            .map(|(c, t)| (c.to_vec(), t));
+            .map(|(c, t)| (c.clone(), t));
         // A cached certificate that reaches only a little way: a new one may reach further.
         let cached = cached.filter(|(_, t)| t * remaining >= CACHE_ENOUGH_M);
-        let (conds, fresh) = match cached {
+        let ((conds, used), fresh) = match cached {
             Some((c, _)) => (c, false),
             None => {
                 let (ids, near) = self.near_cached(par, j, k, cache);
@@ -730,7 +776,8 @@ impl<'a> Verifier<'a> {
                     let blk = self.blockers[i as usize];
                     if blk.len() < 3 {
                         let exit = exit_param(blk, par, j);
-                        return Some(self.furthest(par, k, p, exit, &|x| inside(blk, x)));
+                        let (e, pe) = self.furthest(par, k, p, exit, &|x| inside(blk, x));
+                        return Some((e, pe, vec![i]));
                     }
                     // A polygon is a certificate by itself: on no edge's outer side.
                     let n = blk.len();
@@ -741,11 +788,13 @@ impl<'a> Verifier<'a> {
                             strict: false,
                         })
                         .collect();
-                    (conds, true)
-                } else if self.across_two(ids, q, p) {
+                    ((conds, vec![i]), true)
+                } else if let Some((i, j)) = self.across_two(ids, q, p) {
                     // From one blocker into one it meets: the piece is covered, and the sweep
                     // goes on from p (inside the second).
-                    return Some((k, p));
+                    let mut used = vec![i, j];
+                    used.sort_unstable();
+                    return Some((k, p, used));
                 } else {
                     // Leaving a blocker, the chords are read from `p`, beyond its edge.
                     let leaving = ids
@@ -781,11 +830,18 @@ impl<'a> Verifier<'a> {
                     };
                     // Chords read at the anchor first; near an umbra boundary, from all three
                     // points.
-                    let search = |near: &[&[DVec2]]| -> Option<Vec<Cond>> {
+                    let with_used = |links: &[Link]| {
+                        let c = valid(links)?;
+                        let mut used: Vec<u32> = links.iter().map(|k| ids[k.poly]).collect();
+                        used.sort_unstable();
+                        used.dedup();
+                        Some((c, used))
+                    };
+                    let search = |near: &[&[DVec2]]| -> Option<(Vec<Cond>, Vec<u32>)> {
                         let first = self.chain(near, &pts, false)?;
-                        match valid(&first) {
+                        match with_used(&first) {
                             Some(c) => Some(c),
-                            None => valid(&self.chain(near, &pts, true)?),
+                            None => with_used(&self.chain(near, &pts, true)?),
                         }
                     };
                     // The blockers nearest the point first (the stretch's order, by distance
@@ -800,20 +856,20 @@ impl<'a> Verifier<'a> {
         // Where the first condition stops holding, estimated from its affine values at q and b.
         let t = reach(&conds, q, par.b);
         let est = j + ((END - j) as f64 * t) as u64;
-        let end = self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x)));
+        let (e, pe) = self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x)));
         if fresh {
-            self.cache.borrow_mut().add(conds, q, end.1);
+            self.cache.borrow_mut().add(conds, used.clone(), q, pe);
         }
-        Some(end)
+        Some((e, pe, used))
     }
 
-    /// Whether `[q, p]` lies in the union of two blockers: `q` in one, `p` in another, and the
+    /// The two blockers whose union holds `[q, p]`, if any: `q` in one, `p` in another, and the
     /// segment crosses a segment `[u, v]` between two vertices that both blockers contain (the
     /// shared edge of two pieces of one footprint, or where two blockers overlap). *Proof.* The
     /// crossing `x` lies in `[u, v]`, which lies in both blockers (convex, closed); so `[q, x]`
     /// lies in the first and `[x, p]` in the second, and every point of `[q, p]` is in a
     /// blocker, hence hidden (touching counts). All tests are exact.
-    fn across_two(&self, ids: &[u32], q: DVec2, p: DVec2) -> bool {
+    fn across_two(&self, ids: &[u32], q: DVec2, p: DVec2) -> Option<(u32, u32)> {
         let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
         let in_box = |i: u32, x: DVec2| {
             let (lo, hi) = self.boxes[i as usize];
@@ -839,13 +895,13 @@ impl<'a> Verifier<'a> {
                 for (n, &u) in both.iter().enumerate() {
                     for &v in &both[n..] {
                         if segment_intersection(q, p, u, v) != SegmentIntersection::Disjoint {
-                            return true;
+                            return Some((i, j));
                         }
                     }
                 }
             }
         }
-        false
+        None
     }
 
     /// The largest exact parameter in `[k, est]` whose point passes `ok`, by checking `est` and
