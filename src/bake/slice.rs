@@ -15,10 +15,9 @@
 //!   `lambda <= d_far(B) / (d_far(B) + dist(B, s))` and `lambda <= 1 - d_B / d_line`
 //!   ([`line_lambda`], distances from the VO's line; ARCHITECTURE.md, "Rule 2, the tighter
 //!   bounds"), never looser than the plain bound;
-//! - the *perspective-adjusted height* of a blocker, `e1 + (t - e1) max(1, d_near(B) / d_far(B))`, is the
-//!   VO top it supports for a VO as near as the blocker's nearest point. It only ranks blockers
-//!   for the slice histogram and picks the candidates of a slice; every VO is then checked
-//!   against rule 2 with its own `d_near(s)`.
+//! - the slice histogram ranks blockers by their top: the highest VO a blocker supports at any
+//!   distance where rule 2 caps `lambda` at 1 (a VO as near as the blocker's far side); every
+//!   VO is then checked against rule 2 with its own `d_near(s)`.
 
 use glam::DVec2;
 
@@ -151,8 +150,6 @@ pub struct Support {
     pub top: f64,
     /// Greatest distance between the cell and the blocker (rounded up).
     pub d_far: f64,
-    /// Least distance between the cell and the blocker (rounded down).
-    pub d_near: f64,
 }
 
 impl Support {
@@ -161,7 +158,6 @@ impl Support {
             base,
             top,
             d_far: d_far(cell, poly),
-            d_near: d_near(cell, poly),
         }
     }
 
@@ -214,13 +210,13 @@ impl Support {
         self.holds(e0, e1, g, h, lambda)
     }
 
-    /// The perspective-adjusted height: the VO top this blocker supports for a VO at its own
-    /// nearest distance (0 when it cannot support one above the eyes).
+    /// The height this blocker ranks by in the slice histogram: the VO top it supports where
+    /// rule 2 caps `lambda` at 1, its own top (0 when it cannot support a VO above the eyes).
     pub fn adjusted_height(&self, e1: f64) -> f64 {
-        if self.top <= e1 || self.d_far <= 0.0 {
+        if self.top <= e1 {
             return 0.0;
         }
-        e1 + (self.top - e1) * (self.d_near / self.d_far).max(1.0)
+        self.top
     }
 }
 
@@ -297,7 +293,8 @@ mod tests {
         // Nearest: cell corner (0,10) to the wall's end (-5,30) (the foot of the perpendicular
         // on the wall's line falls just outside the wall).
         let near = 425.0f64.sqrt();
-        assert!(s.d_near <= near && s.d_near > near - 1e-9, "{s:?}");
+        let dn = d_near(&cell, &wall);
+        assert!(dn <= near && dn > near - 1e-9, "{dn}");
         // Farthest: cell corner (0,0) to the wall's end (25,40).
         let far = (25.0f64 * 25.0 + 40.0 * 40.0).sqrt();
         assert!(s.d_far >= far && s.d_far < far + 1e-9, "{s:?}");
@@ -326,7 +323,6 @@ mod tests {
             base: 0.0,
             top: 12.0,
             d_far: 30.0,
-            d_near: 10.0,
         };
         // Bound: 2 + (h - 2) * 30 / 45 <= 12 <=> h <= 17.
         assert!(s.supports_beside(1.5, 2.0, 0.0, 16.99, 20.0, 15.0, 1.0));
@@ -459,7 +455,6 @@ mod tests {
             base: 0.0,
             top: 12.0,
             d_far: 30.0,
-            d_near: 10.0,
         };
         // Bound: 2 + (h - 2) * 30 / 40 <= 12 <=> h <= 15.33.
         assert!(s.supports(1.5, 2.0, 0.0, 15.3, 40.0));
@@ -470,14 +465,9 @@ mod tests {
         // A raised base does not support a VO down to the ground.
         let raised = Support { base: 0.5, ..s };
         assert!(!raised.supports(1.5, 2.0, 0.0, 3.0, 40.0));
-        // Seen from its nearest distance the blocker supports its own top, no more.
+        // The histogram ranks it by its top; not at all when it is no taller than the eyes.
         assert_eq!(s.adjusted_height(2.0), 12.0);
-        let far = Support {
-            d_near: 60.0,
-            d_far: 30.0,
-            ..s
-        };
-        assert_eq!(far.adjusted_height(2.0), 22.0);
+        assert_eq!(s.adjusted_height(12.0), 0.0);
     }
 
     #[test]
