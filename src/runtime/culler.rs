@@ -4,15 +4,18 @@
 //! Input: the engine's object boxes `[xmin, ymin, zmin, xmax, ymax, zmax]` in the store's local
 //! frame (or in world coordinates with the frame's origin, [`BoxTree::from_world`]), indexed by
 //! their position in the input slice; per query, a [`Frame`], a cell id and its [`CellRecord`].
-//! Output: [`BoxTree`], a bounding volume hierarchy built once per scene, and per cell entry the
-//! ascending indices of the objects that may be visible ([`pvs`]).
+//! Output: [`BoxTree`], a bounding volume hierarchy built once per scene (nodes of up to 4
+//! children, leaves of up to 8 boxes), and per cell entry the ascending indices of the objects
+//! that may be visible ([`pvs`]).
 //! Invariants:
 //! - the PVS is the set of objects that no VO of the cell hides by rule 3
 //!   ([`PreparedVo::cover`] `== Hidden`); the hierarchy only saves work. A subtree is culled when
 //!   its bounds are `Hidden` (rule 3 is monotone under inclusion, so every box inside is hidden
 //!   too), and a VO is dropped for a subtree when its bounds are `Outside` that VO's umbra (then
 //!   no box inside can be hidden by it). Property tests check the result against the box-by-box
-//!   rule. Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that
+//!   rule. The VOs are tried in any order (the one that last hid something first), which
+//!   changes how many are tried, not the answer; a box is tested for `Hidden` alone
+//!   ([`PreparedVo::hides_probe`], the same arithmetic as `cover`). Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that
 //!   rule 3 grows by 1 mm) could tell the two apart, at a box lying within about 1e-12 m of an
 //!   umbra edge; even then the hierarchy stays sound: a subtree is culled only when its bounds
 //!   are hidden, which, by rule 3's margin, every box inside really is, and dropping a VO can
@@ -32,8 +35,9 @@ use crate::runtime::grid::CellId;
 use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe};
 
 /// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
-/// leaf kept, by [`PreparedVo::cover`] alone, from memory laid out in tree order): on the
-/// generated 10^5 city, leaves of 8 take about half the time of leaves of 4.
+/// leaf kept, for `Hidden` alone, from memory laid out in tree order): on the generated 10^5
+/// city, with nodes of 4 children, leaves of 8 take 2.03M instructions per cell entry in
+/// [`pvs`] (callgrind), leaves of 4 2.16M, of 6 2.04M, of 12 2.13M, of 16 2.18M.
 pub const LEAF_SIZE: usize = 8;
 /// How a metre of box top weighs against a metre of horizontal extent when a node picks its
 /// split axis. Splitting by top puts boxes of like heights together, so rule 3's height test
@@ -43,8 +47,8 @@ const TOP_WEIGHT: f64 = 10.0;
 /// Children per node, at most: the binary median-split tree with its every other level left
 /// out. A node's test costs the same whatever its size, and most tested nodes straddle an
 /// umbra's edge, so fewer levels test fewer nodes: on the generated 10^5 city, 4,013 nodes
-/// and 2.07M instructions per cell entry against 4,970 and 2.31M with 2 children (8: 4,077
-/// and 2.11M, through the intermediate nodes).
+/// and 2.03M instructions per cell entry against 4,970 and 2.31M with 2 children (8: 4,077
+/// and 2.02M, no better).
 const WIDTH: usize = 4;
 /// Depth of the traversal stack. A median split over `n` boxes is `ceil(log2(n / LEAF_SIZE))`
 /// binary levels deep, at most 30 for `u32` indices, so at most 15 levels of [`WIDTH`] 4; the
