@@ -811,6 +811,13 @@ mod tests {
         assert!(tot.boxes_tested < n, "{tot:?} of {n}");
     }
 
+    /// Most levels of nodes over `n` boxes: the median split's binary levels,
+    /// `ceil(log2(n / LEAF_SIZE))`, taken `log2(WIDTH)` at a time, and the root.
+    fn depth_bound(n: usize) -> usize {
+        let binary = (n.div_ceil(LEAF_SIZE) as f64).log2().ceil() as usize;
+        1 + binary.div_ceil(WIDTH.ilog2() as usize)
+    }
+
     #[test]
     fn tree_is_balanced() {
         let mut r = Lcg(1);
@@ -822,12 +829,12 @@ mod tests {
                 })
                 .collect();
             let t = BoxTree::new(&boxes);
-            let bound = 1 + (n.div_ceil(LEAF_SIZE) as f64).log2().ceil() as usize;
+            let bound = depth_bound(n);
             assert!(t.depth() <= bound, "n = {n}: depth {} > {bound}", t.depth());
         }
         // Identical boxes split too.
         let t = BoxTree::new(&vec![[0.0, 0.0, 0.0, 1.0, 1.0, 1.0]; 1000]);
-        let bound = 1 + (1000usize.div_ceil(LEAF_SIZE) as f64).log2().ceil() as usize;
+        let bound = depth_bound(1000);
         assert!(t.depth() <= bound, "depth {} > {bound}", t.depth());
     }
 
