@@ -11,6 +11,9 @@
 //! - a box that touches the (grown) cell is never hidden;
 //! - `Hidden` for a box implies `Hidden` for every box inside it (all three conditions are
 //!   monotone), which lets the culler cull a whole subtree at once.
+//! - the culler's box test, [`PreparedVo::hides_probe`], is `cover == Hidden` with the same
+//!   arithmetic in the same order, only cheaper (each form's least value alone); a test checks
+//!   the two agree.
 //!
 //! ## The 2D umbra of a segment from a convex cell
 //! Let the cell lie strictly left of the directed line `a -> b` (swap `a` and `b` otherwise; if
