@@ -4,15 +4,18 @@
 //! Input: the engine's object boxes `[xmin, ymin, zmin, xmax, ymax, zmax]` in the store's local
 //! frame (or in world coordinates with the frame's origin, [`BoxTree::from_world`]), indexed by
 //! their position in the input slice; per query, a [`Frame`], a cell id and its [`CellRecord`].
-//! Output: [`BoxTree`], a bounding volume hierarchy built once per scene, and per cell entry the
-//! ascending indices of the objects that may be visible ([`pvs`]).
+//! Output: [`BoxTree`], a bounding volume hierarchy built once per scene (nodes of up to 4
+//! children, leaves of up to 8 boxes), and per cell entry the ascending indices of the objects
+//! that may be visible ([`pvs`]).
 //! Invariants:
 //! - the PVS is the set of objects that no VO of the cell hides by rule 3
 //!   ([`PreparedVo::cover`] `== Hidden`); the hierarchy only saves work. A subtree is culled when
 //!   its bounds are `Hidden` (rule 3 is monotone under inclusion, so every box inside is hidden
 //!   too), and a VO is dropped for a subtree when its bounds are `Outside` that VO's umbra (then
 //!   no box inside can be hidden by it). Property tests check the result against the box-by-box
-//!   rule. Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that
+//!   rule. The VOs are tried in any order (the one that last hid something first), which
+//!   changes how many are tried, not the answer; a box is tested for `Hidden` alone
+//!   ([`PreparedVo::hides_probe`], the same arithmetic as `cover`). Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that
 //!   rule 3 grows by 1 mm) could tell the two apart, at a box lying within about 1e-12 m of an
 //!   umbra edge; even then the hierarchy stays sound: a subtree is culled only when its bounds
 //!   are hidden, which, by rule 3's margin, every box inside really is, and dropping a VO can
@@ -32,20 +35,28 @@ use crate::runtime::grid::CellId;
 use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe};
 
 /// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
-/// leaf kept, by [`PreparedVo::cover`] alone, from memory laid out in tree order): on the
-/// generated 10^5 city, leaves of 8 take about half the time of leaves of 4.
+/// leaf kept, for `Hidden` alone, from memory laid out in tree order): on the generated 10^5
+/// city, with nodes of 4 children, leaves of 8 take 2.03M instructions per cell entry in
+/// [`pvs`] (callgrind), leaves of 4 2.16M, of 6 2.04M, of 12 2.13M, of 16 2.18M.
 pub const LEAF_SIZE: usize = 8;
 /// How a metre of box top weighs against a metre of horizontal extent when a node picks its
 /// split axis. Splitting by top puts boxes of like heights together, so rule 3's height test
 /// decides more groups whole (a node hidden, or too tall for a VO): on the generated 10^5 city,
 /// 10 takes about two thirds of the nodes and time of 1.
 const TOP_WEIGHT: f64 = 10.0;
+/// Children per node, at most: the binary median-split tree with its every other level left
+/// out. A node's test costs the same whatever its size, and most tested nodes straddle an
+/// umbra's edge, so fewer levels test fewer nodes: on the generated 10^5 city, 4,013 nodes
+/// and 2.03M instructions per cell entry against 4,970 and 2.31M with 2 children (8: 4,077
+/// and 2.02M, no better).
+const WIDTH: usize = 4;
 /// Depth of the traversal stack. A median split over `n` boxes is `ceil(log2(n / LEAF_SIZE))`
-/// deep, at most 30 for `u32` indices.
+/// binary levels deep, at most 30 for `u32` indices, so at most 15 levels of [`WIDTH`] 4; the
+/// walk holds at most 3 siblings of each node of its path, and the children of the last.
 const STACK: usize = 64;
-const LEAF: u32 = u32::MAX;
 
-/// One node of the flat hierarchy. Its subtree's boxes are `start..end` in tree order.
+/// One node of the flat hierarchy. Its subtree's boxes are `start..end` in tree order; its
+/// children's ranges follow each other in that order.
 #[derive(Clone, Copy, Debug)]
 struct Node {
     bounds: [f64; 6],
@@ -54,10 +65,27 @@ struct Node {
     min_top: f64,
     start: u32,
     end: u32,
+    /// Children (the first `len`), in tree order; a leaf has none.
+    kids: [u32; WIDTH],
+    len: u32,
+}
+
+impl Node {
+    fn kids(&self) -> &[u32] {
+        &self.kids[..self.len as usize]
+    }
+}
+
+/// A node of the binary tree that [`BoxTree::new`] builds first.
+#[derive(Clone, Copy, Debug)]
+struct BinNode {
+    node: Node,
     /// Children, or [`LEAF`].
     left: u32,
     right: u32,
 }
+
+const LEAF: u32 = u32::MAX;
 
 /// A bounding volume hierarchy over object boxes in the store's local frame; object `i` is
 /// `boxes[i]` of the input.
@@ -109,13 +137,17 @@ impl BoxTree {
                 invalid.push(i as u32);
             }
         }
-        let mut nodes: Vec<Node> = Vec::with_capacity(2 * items.len().div_ceil(LEAF_SIZE));
+        let mut nodes: Vec<BinNode> = Vec::with_capacity(2 * items.len().div_ceil(LEAF_SIZE));
         if !items.is_empty() {
-            let blank = Node {
-                bounds: [0.0; 6],
-                min_top: 0.0,
-                start: 0,
-                end: 0,
+            let blank = BinNode {
+                node: Node {
+                    bounds: [0.0; 6],
+                    min_top: 0.0,
+                    start: 0,
+                    end: 0,
+                    kids: [0; WIDTH],
+                    len: 0,
+                },
                 left: LEAF,
                 right: LEAF,
             };
@@ -137,11 +169,14 @@ impl BoxTree {
                         cmax[k] = cmax[k].max(c);
                     }
                 }
-                let mut node = Node {
-                    bounds,
-                    min_top,
-                    start: s as u32,
-                    end: e as u32,
+                let mut node = BinNode {
+                    node: Node {
+                        bounds,
+                        min_top,
+                        start: s as u32,
+                        end: e as u32,
+                        ..blank.node
+                    },
                     ..blank
                 };
                 if e - s > LEAF_SIZE {
@@ -164,7 +199,7 @@ impl BoxTree {
             }
         }
         BoxTree {
-            nodes,
+            nodes: widen(&nodes),
             ids: items.iter().map(|&(i, _)| i).collect(),
             boxes: items.iter().map(|&(_, b)| b).collect(),
             invalid,
@@ -210,14 +245,57 @@ impl BoxTree {
         }
         while let Some((ni, d)) = todo.pop() {
             best = best.max(d);
-            let n = &self.nodes[ni];
-            if n.left != LEAF {
-                todo.push((n.left as usize, d + 1));
-                todo.push((n.right as usize, d + 1));
+            for &k in self.nodes[ni].kids() {
+                todo.push((k as usize, d + 1));
             }
         }
         best
     }
+}
+
+/// The nodes of [`WIDTH`] children from the binary tree `bin` (root 0): each node's children
+/// are its binary descendants two levels down, or the leaves above them, in tree order. Its
+/// children are stored together, after it.
+fn widen(bin: &[BinNode]) -> Vec<Node> {
+    let mut out: Vec<Node> = Vec::with_capacity(bin.len());
+    if bin.is_empty() {
+        return out;
+    }
+    out.push(bin[0].node);
+    let mut todo = vec![(0usize, 0usize)];
+    while let Some((b, o)) = todo.pop() {
+        // Replace every internal node of the front by its two children, level by level, while
+        // the front stays within WIDTH.
+        let mut front = vec![b as u32];
+        loop {
+            let internal = front
+                .iter()
+                .filter(|&&f| bin[f as usize].left != LEAF)
+                .count();
+            if internal == 0 || front.len() + internal > WIDTH {
+                break;
+            }
+            front = front
+                .iter()
+                .flat_map(|&f| match bin[f as usize] {
+                    BinNode { left: LEAF, .. } => vec![f],
+                    BinNode { left, right, .. } => vec![left, right],
+                })
+                .collect();
+        }
+        let len = front.len();
+        if len == 1 {
+            continue; // a leaf
+        }
+        let first = out.len();
+        for (j, &f) in front.iter().enumerate() {
+            out.push(bin[f as usize].node);
+            out[o].kids[j] = (first + j) as u32;
+            todo.push((f as usize, first + j));
+        }
+        out[o].len = len as u32;
+    }
+    out
 }
 
 impl BoxTree {
@@ -265,7 +343,8 @@ impl BoxTree {
                 }
                 _ => {}
             }
-            if node.left == LEAF || sp + 2 > STACK {
+            let kids = node.kids();
+            if kids.is_empty() || sp + kids.len() > STACK {
                 for k in node.start..node.end {
                     let b = &self.boxes[k as usize];
                     if meets(b) && vo.cover(view, b) == Cover::Hidden {
@@ -274,10 +353,11 @@ impl BoxTree {
                 }
                 continue;
             }
-            // Left popped first: positions come out ascending.
-            stack[sp] = node.right;
-            stack[sp + 1] = node.left;
-            sp += 2;
+            // The first child popped first: positions come out ascending.
+            for &k in kids.iter().rev() {
+                stack[sp] = k;
+                sp += 1;
+            }
         }
     }
 }
@@ -299,53 +379,70 @@ pub struct PvsStats {
     pub visible: usize,
 }
 
-/// `None` when a VO of `mask` hides `bx`, else the VOs of `mask` whose umbra `bx` meets.
+/// `None` when a VO of `mask` (not empty) hides `bx`, else the VOs of `mask` whose umbra `bx`
+/// meets. VO `*last` is tried first, and becomes the VO that hid `bx` (see [`hidden`]).
 #[inline]
 fn test(
-    prepared: &[Option<PreparedVo>; MAX_VOS_PER_CELL],
+    prepared: &[PreparedVo; MAX_VOS_PER_CELL],
     view: &crate::runtime::frame::CellView,
     mask: u16,
+    last: &mut usize,
     bx: &[f64; 6],
     min_top: f64,
 ) -> Option<u16> {
     let g = GroupProbe::new(view, bx, min_top);
     let mut left = mask;
     let mut keep = mask;
-    while left != 0 {
-        let i = left.trailing_zeros() as usize;
-        left &= left - 1;
-        if let Some(Some(p)) = prepared.get(i) {
-            match p.cover_group_probe(view, &g) {
-                Cover::Hidden => return None,
-                Cover::Outside => keep &= !(1 << i),
-                Cover::Partial => {}
-            }
-        }
+    let mut i = *last;
+    if mask & (1 << i) == 0 {
+        i = left.trailing_zeros() as usize;
     }
-    Some(keep)
+    loop {
+        left &= !(1 << i);
+        match prepared[i].cover_group_probe(view, &g) {
+            Cover::Hidden => {
+                *last = i;
+                return None;
+            }
+            Cover::Outside => keep &= !(1 << i),
+            Cover::Partial => {}
+        }
+        if left == 0 {
+            return Some(keep);
+        }
+        i = left.trailing_zeros() as usize;
+    }
 }
 
-/// Whether a VO of `mask` hides box `bx`: the VO-independent part of rule 3 once
-/// ([`Probe`]), then each VO's test.
+/// Whether a VO of `mask` (not empty) hides box `bx`: the VO-independent part of rule 3 once
+/// ([`Probe`]), then each VO's test. VO `*last` is tried first, and becomes the VO that hid
+/// `bx`: a VO that hid a box tends to hide the next boxes of the depth-first walk too, which
+/// are its neighbours. The order changes no answer, only how many VOs are tried.
 #[inline]
 fn hidden(
-    prepared: &[Option<PreparedVo>; MAX_VOS_PER_CELL],
+    prepared: &[PreparedVo; MAX_VOS_PER_CELL],
     view: &crate::runtime::frame::CellView,
     mask: u16,
+    last: &mut usize,
     bx: &[f64; 6],
 ) -> bool {
     let probe = Probe::new(view, bx);
     let mut left = mask;
-    while left != 0 {
-        let i = left.trailing_zeros() as usize;
-        left &= left - 1;
-        if let Some(Some(p)) = prepared.get(i) {
-            if p.cover_probe(view, &probe) == Cover::Hidden {
-                return true;
-            }
-        }
+    let mut i = *last;
+    if mask & (1 << i) == 0 {
+        i = left.trailing_zeros() as usize;
     }
-    false
+    loop {
+        left &= !(1 << i);
+        if prepared[i].hides_probe(view, &probe) {
+            *last = i;
+            return true;
+        }
+        if left == 0 {
+            return false;
+        }
+        i = left.trailing_zeros() as usize;
+    }
 }
 
 /// The PVS of cell `id` with record `rec`: `out` is cleared, then holds the ascending indices
@@ -376,13 +473,17 @@ pub fn pvs_with_stats(
     let Some(view) = frame.cell_view(id, ground) else {
         return all(out, st);
     };
-    let mut prepared: [Option<PreparedVo>; MAX_VOS_PER_CELL] = [None; MAX_VOS_PER_CELL];
+    // The VOs that can hide something, first to last; `full` has a bit for each. A VO whose
+    // umbra is empty ([`PreparedVo::is_usable`]) would be dropped at the root as `Outside`.
+    let mut prepared = [PreparedVo::UNUSABLE; MAX_VOS_PER_CELL];
     let mut full: u16 = 0;
     for (i, (slot, q)) in prepared.iter_mut().zip(vos).enumerate() {
         if let Some(g) = frame.dequantize(id, ground, q) {
-            *slot = Some(PreparedVo::new(&view, &g));
-            full |= 1 << i;
+            *slot = PreparedVo::new(&view, &g);
             st.vos += 1;
+            if slot.is_usable() {
+                full |= 1 << i;
+            }
         }
     }
     if full == 0 {
@@ -401,6 +502,7 @@ pub fn pvs_with_stats(
         keep(out, id);
     }
 
+    let mut last = 0;
     let mut stack = [(0u32, 0u16); STACK];
     let mut sp = 0;
     if !tree.nodes.is_empty() {
@@ -413,29 +515,38 @@ pub fn pvs_with_stats(
         let node = &tree.nodes[ni as usize];
         let range = node.start as usize..node.end as usize;
         st.nodes_tested += 1;
-        let Some(mask) = test(&prepared, &view, mask, &node.bounds, node.min_top) else {
+        let Some(mask) = test(
+            &prepared,
+            &view,
+            mask,
+            &mut last,
+            &node.bounds,
+            node.min_top,
+        ) else {
             st.subtrees_culled += 1;
             continue;
         };
-        if mask == 0 || (node.left != LEAF && sp + 2 > STACK) {
+        let kids = node.kids();
+        if mask == 0 || sp + kids.len() > STACK {
             st.subtrees_kept += 1;
             for &id in &tree.ids[range] {
                 keep(out, id);
             }
             continue;
         }
-        if node.left == LEAF {
+        if kids.is_empty() {
             for k in range {
                 st.boxes_tested += 1;
-                if !hidden(&prepared, &view, mask, &tree.boxes[k]) {
+                if !hidden(&prepared, &view, mask, &mut last, &tree.boxes[k]) {
                     keep(out, tree.ids[k]);
                 }
             }
             continue;
         }
-        stack[sp] = (node.right, mask);
-        stack[sp + 1] = (node.left, mask);
-        sp += 2;
+        for &k in kids {
+            stack[sp] = (k, mask);
+            sp += 1;
+        }
     }
     for w in 0..words {
         let mut visible = out[w];
@@ -700,6 +811,13 @@ mod tests {
         assert!(tot.boxes_tested < n, "{tot:?} of {n}");
     }
 
+    /// Most levels of nodes over `n` boxes: the median split's binary levels,
+    /// `ceil(log2(n / LEAF_SIZE))`, taken `log2(WIDTH)` at a time, and the root.
+    fn depth_bound(n: usize) -> usize {
+        let binary = (n.div_ceil(LEAF_SIZE) as f64).log2().ceil() as usize;
+        1 + binary.div_ceil(WIDTH.ilog2() as usize)
+    }
+
     #[test]
     fn tree_is_balanced() {
         let mut r = Lcg(1);
@@ -711,13 +829,56 @@ mod tests {
                 })
                 .collect();
             let t = BoxTree::new(&boxes);
-            let bound = 1 + (n.div_ceil(LEAF_SIZE) as f64).log2().ceil() as usize;
+            let bound = depth_bound(n);
             assert!(t.depth() <= bound, "n = {n}: depth {} > {bound}", t.depth());
         }
         // Identical boxes split too.
         let t = BoxTree::new(&vec![[0.0, 0.0, 0.0, 1.0, 1.0, 1.0]; 1000]);
-        let bound = 1 + (1000usize.div_ceil(LEAF_SIZE) as f64).log2().ceil() as usize;
+        let bound = depth_bound(1000);
         assert!(t.depth() <= bound, "depth {} > {bound}", t.depth());
+    }
+
+    /// Every node's children tile its range of boxes in order, lie within its bounds and have
+    /// its least top among theirs; leaves hold at most LEAF_SIZE boxes, nodes at most WIDTH
+    /// children, and every box lies within its leaf's bounds.
+    #[test]
+    fn children_tile_their_parent() {
+        let mut r = Lcg(7);
+        for n in [1usize, 8, 9, 17, 100, 5_000] {
+            let (_, boxes) = random_scene(&mut r, n);
+            let t = BoxTree::new(&boxes);
+            let within =
+                |a: &[f64; 6], b: &[f64; 6]| (0..3).all(|k| a[k] >= b[k] && a[k + 3] <= b[k + 3]);
+            let mut leaves = 0;
+            for node in &t.nodes {
+                assert!(node.start < node.end && node.len as usize <= WIDTH);
+                if node.kids().is_empty() {
+                    leaves += node.end - node.start;
+                    assert!((node.end - node.start) as usize <= LEAF_SIZE);
+                    for b in &t.boxes[node.start as usize..node.end as usize] {
+                        assert!(within(b, &node.bounds));
+                        assert!(b[5] >= node.min_top);
+                    }
+                    continue;
+                }
+                assert!(node.len >= 2);
+                let mut at = node.start;
+                let mut min_top = f64::INFINITY;
+                for &k in node.kids() {
+                    let kid = &t.nodes[k as usize];
+                    assert_eq!(kid.start, at);
+                    at = kid.end;
+                    assert!(within(&kid.bounds, &node.bounds));
+                    min_top = min_top.min(kid.min_top);
+                }
+                assert_eq!(at, node.end);
+                assert_eq!(min_top, node.min_top);
+            }
+            assert_eq!(leaves as usize, t.positions());
+            if let Some(root) = t.nodes.first() {
+                assert_eq!(root.end as usize, t.positions());
+            }
+        }
     }
 
     fn arb_box() -> impl Strategy<Value = [f64; 6]> {

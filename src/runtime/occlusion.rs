@@ -11,6 +11,9 @@
 //! - a box that touches the (grown) cell is never hidden;
 //! - `Hidden` for a box implies `Hidden` for every box inside it (all three conditions are
 //!   monotone), which lets the culler cull a whole subtree at once.
+//! - the culler's box test, [`PreparedVo::hides_probe`], is `cover == Hidden` with the same
+//!   arithmetic in the same order, only cheaper (each form's least value alone); a test checks
+//!   the two agree.
 //!
 //! ## The 2D umbra of a segment from a convex cell
 //! Let the cell lie strictly left of the directed line `a -> b` (swap `a` and `b` otherwise; if
@@ -78,6 +81,26 @@ pub struct PreparedVo {
     planes: [[f64; 3]; 3],
 }
 
+/// The greater of `a` and `b` (either when they are equal or one is NaN): one `maxsd`.
+#[inline(always)]
+fn max(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// The lesser of `a` and `b` (either when they are equal or one is NaN): one `minsd`.
+#[inline(always)]
+fn min(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
 /// `orient(u, v, p)` as a linear form in `p`.
 fn linear(u: [f64; 2], v: [f64; 2]) -> [f64; 3] {
     // (v - u) x (p - u) = (vx - ux)(py - uy) - (vy - uy)(px - ux)
@@ -98,6 +121,23 @@ fn corners(view: &CellView) -> [[f64; 2]; 4] {
 }
 
 impl PreparedVo {
+    /// A VO that hides nothing (its umbra is empty): a placeholder.
+    pub const UNUSABLE: PreparedVo = PreparedVo {
+        g: 0.0,
+        h: 0.0,
+        inv_d_line: 0.0,
+        inv_d_line_lo: 0.0,
+        beyond_form: [0.0; 3],
+        usable: false,
+        planes: [[0.0; 3]; 3],
+    };
+
+    /// False when the VO's umbra is empty (its line meets the cell, or it is degenerate): then
+    /// [`Self::cover`] is `Outside` for every box.
+    pub fn is_usable(&self) -> bool {
+        self.usable
+    }
+
     pub fn new(view: &CellView, vo: &VoGeom) -> PreparedVo {
         let (mut a, mut b) = (vo.a, vo.b);
         let d = [b[0] - a[0], b[1] - a[1]];
@@ -184,28 +224,56 @@ impl PreparedVo {
         if let Some(c) = self.footprint(p.fp) {
             return c;
         }
-        // Heights (ARCHITECTURE.md, rule 3): with the factor `F = 1 + dl / d_line >= 1`, the
-        // box is hidden when `zmax <= e1 + (h - e1) F` and `zmin >= e0 - (e0 - g) F`.
-        if !(view.e0 >= self.g && self.h >= view.e1) {
-            return Cover::Partial;
-        }
-        // A box touching the cell is refused outright.
-        if !p.apart {
-            return Cover::Partial;
-        }
-        // `zmin >= g` compares stored values, with no arithmetic: exact. Then `F >= 1` makes a
-        // box no taller than the VO hidden.
-        if p.zmin >= self.g && p.z <= self.h {
-            return Cover::Hidden;
-        }
-        let f = 1.0 + self.beyond(p.fp) * self.inv_d_line;
-        let top = view.e1 + (self.h - view.e1) * f;
-        let bottom_ok = p.zmin >= self.g || p.zlo >= view.e0 - (view.e0 - self.g) * f;
-        if p.z <= top && bottom_ok {
+        if self.heights_hide(view, p) {
             Cover::Hidden
         } else {
             Cover::Partial
         }
+    }
+
+    /// Whether [`Self::cover_probe`] is `Hidden`. Cheaper: `Hidden` needs every corner strictly
+    /// inside each half-plane, so only each form's least value over the footprint is computed,
+    /// and the test stops at the first form that fails (where [`Self::footprint`] also finds the
+    /// greatest value, to tell `Outside` from `Partial`).
+    #[inline]
+    pub fn hides_probe(&self, view: &CellView, p: &Probe) -> bool {
+        if !self.usable {
+            return false;
+        }
+        let [x0, y0, x1, y1] = p.fp;
+        for k in &self.planes {
+            let (px0, px1) = (k[0] * x0, k[0] * x1);
+            let (py0, py1) = (k[1] * y0, k[1] * y1);
+            // The same sum, in the same order, as `min` in [`Self::footprint`].
+            if !(min(px0, px1) + min(py0, py1) + k[2] > 0.0) {
+                return false;
+            }
+        }
+        self.heights_hide(view, p)
+    }
+
+    /// The height part of rule 3, for a probe whose footprint is strictly inside the umbra.
+    #[inline]
+    fn heights_hide(&self, view: &CellView, p: &Probe) -> bool {
+        // Heights (ARCHITECTURE.md, rule 3): with the factor `F = 1 + dl / d_line >= 1`, the
+        // box is hidden when `zmax <= e1 + (h - e1) F` and `zmin >= e0 - (e0 - g) F`.
+        if !(view.e0 >= self.g && self.h >= view.e1) {
+            return false;
+        }
+        // A box touching the cell is refused outright. (Tested here, not in [`Probe::new`]: few
+        // footprints get this far.)
+        if !p.apart(view) {
+            return false;
+        }
+        // `zmin >= g` compares stored values, with no arithmetic: exact. Then `F >= 1` makes a
+        // box no taller than the VO hidden.
+        if p.zmin >= self.g && p.z <= self.h {
+            return true;
+        }
+        let f = 1.0 + self.beyond(p.fp) * self.inv_d_line;
+        let top = view.e1 + (self.h - view.e1) * f;
+        let bottom_ok = p.zmin >= self.g || p.zlo >= view.e0 - (view.e0 - self.g) * f;
+        p.z <= top && bottom_ok
     }
 
     /// The footprint test of [`Self::cover`] for the grown footprint `fp`: `Some(Outside)` when
@@ -218,16 +286,19 @@ impl PreparedVo {
         // pick. All corners strictly in every half-plane is needed for Hidden; all corners
         // outside one of them (non-strictly) gives Outside.
         // Branch-free: the greater and the lesser of the two products on each axis are the
-        // products at those corners, bit for bit.
+        // products at those corners, bit for bit (for `k >= 0` and `x0 <= x1`, `k x0 <= k x1`
+        // after rounding too). [`max`] and [`min`] rather than `f64::max`, whose NaN handling
+        // costs instructions here: no NaN reaches this point (finite boxes, and a VO whose forms
+        // are not finite is not usable).
         let mut all_in = true;
         for k in &self.planes {
             let (px0, px1) = (k[0] * x0, k[0] * x1);
             let (py0, py1) = (k[1] * y0, k[1] * y1);
-            let max = px0.max(px1) + py0.max(py1) + k[2];
+            let max = max(px0, px1) + max(py0, py1) + k[2];
             if !(max > 0.0) {
                 return Some(Cover::Outside);
             }
-            let min = px0.min(px1) + py0.min(py1) + k[2];
+            let min = min(px0, px1) + min(py0, py1) + k[2];
             all_in &= min > 0.0;
         }
         if all_in {
@@ -275,8 +346,7 @@ impl PreparedVo {
 }
 
 /// The part of rule 3 that depends on a box and the cell but not on the VO, computed once per
-/// box for every VO of the cell: the grown footprint, the top, and whether it is apart from the
-/// cell.
+/// box for every VO of the cell: the grown footprint, the bottom and the top.
 #[derive(Clone, Copy, Debug)]
 pub struct Probe {
     /// The footprint grown by the margin, `[x0, y0, x1, y1]`.
@@ -286,8 +356,6 @@ pub struct Probe {
     zlo: f64,
     /// The top grown by the margin.
     z: f64,
-    /// The grown footprint and the grown cell are apart.
-    apart: bool,
 }
 
 impl Probe {
@@ -295,15 +363,21 @@ impl Probe {
     #[inline]
     pub fn new(view: &CellView, bx: &[f64; 6]) -> Probe {
         let m = MARGIN_M;
-        let fp = [bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m];
-        let [cx0, cy0, cx1, cy1] = view.rect;
+        let _ = view;
         Probe {
-            fp,
+            fp: [bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m],
             zmin: bx[2],
             zlo: bx[2] - m,
             z: bx[5] + m,
-            apart: fp[0] > cx1 + m || fp[2] < cx0 - m || fp[1] > cy1 + m || fp[3] < cy0 - m,
         }
+    }
+
+    /// The grown footprint and the grown cell are apart.
+    #[inline]
+    fn apart(&self, view: &CellView) -> bool {
+        let (fp, m) = (self.fp, MARGIN_M);
+        let [cx0, cy0, cx1, cy1] = view.rect;
+        fp[0] > cx1 + m || fp[2] < cx0 - m || fp[1] > cy1 + m || fp[3] < cy0 - m
     }
 }
 
@@ -535,6 +609,12 @@ mod tests {
                 let z0 = if r(0.0, 1.0) < 0.3 { r(-8.0, 0.0) } else { 0.0 };
                 let bx = [cx, cy, z0, cx + w, cy + d, r(0.5, 80.0)];
                 let c = p.cover(&v, &bx);
+                // The culler's box test answers the same.
+                assert_eq!(
+                    p.hides_probe(&v, &Probe::new(&v, &bx)),
+                    c == Cover::Hidden,
+                    "{vo:?} {bx:?}"
+                );
                 // The plain rule (three planes, the D_near / D_far bound) is implied.
                 if plain_hidden(&v, &vo, &bx) {
                     assert_eq!(c, Cover::Hidden, "{vo:?} {bx:?}");
