@@ -220,7 +220,7 @@ struct NearCache<'a> {
 }
 
 /// How far ahead of the sweep the blockers near the segment are gathered at once, metres.
-pub const NEAR_AHEAD_M: f64 = 24.0;
+pub const NEAR_AHEAD_M: f64 = 48.0;
 
 /// A uniform grid of buckets over the blockers' boxes (bucket `k` holds
 /// `ids[start[k]..start[k + 1]]`; a box is listed in every bucket it meets).
