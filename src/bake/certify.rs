@@ -25,7 +25,7 @@ use glam::DVec2;
 use super::quantize::{quantize, Refused};
 use super::slice::{d_near, line_lambda, Support};
 use crate::geom::predicates::point_in_umbra;
-use crate::geom::verify::Verifier;
+use crate::geom::verify::{BlockerIndex, Verifier};
 use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
 
@@ -42,9 +42,11 @@ pub struct Certifier<'a> {
     pub heights: (f64, f64, f64),
     /// Usable blockers: polygon and rule-2 support.
     pub blockers: Vec<(&'a [DVec2], Support)>,
-    /// One verifier per height level and distance band, built when first needed, with the
-    /// index in `blockers` of each of its blockers.
-    pub verifiers: Vec<std::cell::OnceCell<(Verifier<'a>, Vec<u32>)>>,
+    /// `blockers`' polygons, indexed once for all the cell's verifiers (which name blockers by
+    /// their position in `blockers`).
+    pub index: &'a BlockerIndex<'a>,
+    /// One verifier per height level and distance band, built when first needed.
+    pub verifiers: Vec<std::cell::OnceCell<Verifier<'a>>>,
 }
 
 /// A stored VO and where it came from.
@@ -102,7 +104,7 @@ impl<'a> Certifier<'a> {
     /// (for band 0, wherever it stands: the ratio at its cap of 1, `t >= h`). Rule 2's bound
     /// only falls as the VO's distance grows, so these blockers support every VO of the band,
     /// and one verifier, with the certificates it caches, serves all of them.
-    fn verifier(&self, level: u8, band: usize) -> &(Verifier<'a>, Vec<u32>) {
+    fn verifier(&self, level: u8, band: usize) -> &Verifier<'a> {
         self.verifiers[level as usize * BANDS + band].get_or_init(|| {
             let (e0, e1, g) = self.heights;
             let h = self.frame.vo_top(e1, level);
@@ -110,11 +112,10 @@ impl<'a> Certifier<'a> {
             let ids: Vec<u32> = (0..self.blockers.len() as u32)
                 .filter(|&i| self.blockers[i as usize].1.supports(e0, e1, g, h, dn))
                 .collect();
-            let v = Verifier::new(self.cell, ids.iter().map(|&i| self.blockers[i as usize].0))
+            Verifier::subset(self.cell, self.index, &ids)
                 // Pieces shorter than MIN_PIECE_M are dropped anyway.
                 .with_max_step(0.5 * MIN_PIECE_M)
-                .with_min_step(MIN_STEP_M);
-            (v, ids)
+                .with_min_step(MIN_STEP_M)
         })
     }
 
@@ -167,8 +168,8 @@ impl<'a> Certifier<'a> {
         let band = self.band(a, b, 0.0);
         for level in (1..=level).rev().take(LEVEL_FALLBACKS) {
             stats.checks += 1;
-            let (v, ids) = self.verifier(level, band);
-            let mut out: Vec<Piece> = v
+            let mut out: Vec<Piece> = self
+                .verifier(level, band)
                 .hidden_parts_by(a, b)
                 .into_iter()
                 .filter(|(p, _)| p.p0.distance(p.p1) >= MIN_PIECE_M)
@@ -176,7 +177,7 @@ impl<'a> Certifier<'a> {
                     level,
                     a: p.p0,
                     b: p.p1,
-                    used: used.iter().map(|&k| ids[k as usize]).collect(),
+                    used,
                 })
                 .collect();
             if !out.is_empty() {
@@ -202,7 +203,7 @@ impl<'a> Certifier<'a> {
         let in_band = |qa: DVec2, qb: DVec2| d_near(self.cell, &[qa, qb]) >= floor;
         for (n, level) in (1..=piece.level).rev().take(LEVEL_FALLBACKS).enumerate() {
             let mut checks = 0;
-            let (v, ids) = self.verifier(level, band);
+            let v = self.verifier(level, band);
             // The blockers that certified the last quantized candidate checked: the one kept.
             let mut used: Vec<u32> = Vec::new();
             let r = quantize(
@@ -229,7 +230,7 @@ impl<'a> Certifier<'a> {
                     }
                     match v.hidden_by(qa, qb) {
                         Some(u) => {
-                            used = u.iter().map(|&k| ids[k as usize]).collect();
+                            used = u;
                             true
                         }
                         None => false,
@@ -268,14 +269,10 @@ impl<'a> Certifier<'a> {
                             .map(|(&i, _)| i)
                             .collect();
                         stats.checks += 1;
-                        let v = Verifier::new(
-                            self.cell,
-                            ids.iter().map(|&i| self.blockers[i as usize].0),
-                        )
-                        .with_max_step(0.5 * MIN_PIECE_M);
+                        let v = Verifier::subset(self.cell, self.index, &ids)
+                            .with_max_step(0.5 * MIN_PIECE_M);
                         match v.hidden_by(qa, qb) {
                             Some(u) => {
-                                let u: Vec<u32> = u.iter().map(|&k| ids[k as usize]).collect();
                                 q.level = next.max(top_of(&u));
                             }
                             None => break,

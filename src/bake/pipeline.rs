@@ -706,7 +706,11 @@ impl<'s> Plan<'s> {
         }
         stats.stage_ms[2] += clock(&mut t);
         stats.dense = cands.len();
+        let index = crate::geom::verify::BlockerIndex::new(
+            near.iter().map(|&i| self.set.polys[i as usize].as_slice()),
+        );
         let certifier = super::certify::Certifier {
+            index: &index,
             frame: f,
             id,
             ground,

@@ -327,12 +327,42 @@ impl Grid {
     }
 }
 
+/// Blockers indexed for the verifier: their boxes and a bucket grid over them. One index can
+/// serve many verifiers over subsets of its blockers ([`Verifier::subset`]).
+pub struct BlockerIndex<'a> {
+    polys: Vec<&'a [DVec2]>,
+    boxes: Vec<(DVec2, DVec2)>,
+    grid: Grid,
+}
+
+impl<'a> BlockerIndex<'a> {
+    /// The index of `blockers` (each convex and counter-clockwise, or a 2-vertex segment).
+    pub fn new(blockers: impl IntoIterator<Item = &'a [DVec2]>) -> Self {
+        let polys: Vec<&[DVec2]> = blockers.into_iter().collect();
+        let boxes: Vec<(DVec2, DVec2)> = polys.iter().map(|b| bbox(b)).collect();
+        let grid = Grid::new(&boxes);
+        BlockerIndex { polys, boxes, grid }
+    }
+
+    pub fn len(&self) -> usize {
+        self.polys.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.polys.is_empty()
+    }
+}
+
+/// A verifier's blockers: an index of its own, or a subset of a shared one.
+enum Blockers<'a> {
+    Own(BlockerIndex<'a>),
+    Subset(&'a BlockerIndex<'a>, Vec<bool>),
+}
+
 /// The verifier for one cell and one set of blockers.
 pub struct Verifier<'a> {
     cell: &'a [DVec2],
-    blockers: Vec<&'a [DVec2]>,
-    boxes: Vec<(DVec2, DVec2)>,
-    grid: Grid,
+    set: Blockers<'a>,
     /// Certificates found so far, tried first where they were found (module header).
     cache: std::cell::RefCell<CertCache>,
     /// Longest step past points the sweep cannot certify, metres ([`MAX_STEP_M`]).
@@ -483,20 +513,52 @@ impl Param {
 
 impl<'a> Verifier<'a> {
     /// `cell`: convex, counter-clockwise, non-degenerate. Every blocker: the same, or a segment
-    /// (exactly 2 distinct vertices).
+    /// (exactly 2 distinct vertices). Blockers are named by their position in `blockers`.
     pub fn new(cell: &'a [DVec2], blockers: impl IntoIterator<Item = &'a [DVec2]>) -> Self {
-        let blockers: Vec<&[DVec2]> = blockers.into_iter().collect();
-        let boxes: Vec<(DVec2, DVec2)> = blockers.iter().map(|b| bbox(b)).collect();
-        let grid = Grid::new(&boxes);
+        Self::with_set(cell, Blockers::Own(BlockerIndex::new(blockers)))
+    }
+
+    /// A verifier over the blockers `members` of `index` (named by their position in it).
+    pub fn subset(cell: &'a [DVec2], index: &'a BlockerIndex<'a>, members: &[u32]) -> Self {
+        let mut m = vec![false; index.len()];
+        for &i in members {
+            if let Some(x) = m.get_mut(i as usize) {
+                *x = true;
+            }
+        }
+        Self::with_set(cell, Blockers::Subset(index, m))
+    }
+
+    fn with_set(cell: &'a [DVec2], set: Blockers<'a>) -> Self {
         Verifier {
             cell,
-            blockers,
-            boxes,
-            grid,
+            set,
             cache: Default::default(),
             max_step_m: MAX_STEP_M,
             min_step_m: MIN_PIECE_M,
         }
+    }
+
+    fn index(&self) -> &BlockerIndex<'a> {
+        match &self.set {
+            Blockers::Own(i) => i,
+            Blockers::Subset(i, _) => i,
+        }
+    }
+
+    fn member(&self, i: u32) -> bool {
+        match &self.set {
+            Blockers::Own(_) => true,
+            Blockers::Subset(_, m) => m[i as usize],
+        }
+    }
+
+    fn poly(&self, i: u32) -> &'a [DVec2] {
+        self.index().polys[i as usize]
+    }
+
+    fn bounds(&self, i: u32) -> (DVec2, DVec2) {
+        self.index().boxes[i as usize]
     }
 
     /// This verifier, stepping at most `m` metres past points it cannot certify (it may then
@@ -545,9 +607,12 @@ impl<'a> Verifier<'a> {
                 n.x * x + n.y * y > c
             })
         };
-        let mut out = self.grid.query(lo, hi, &|bl, bh| !clear(bl, bh));
+        let mut out = self.index().grid.query(lo, hi, &|bl, bh| !clear(bl, bh));
         out.retain(|&i| {
-            let (bl, bh) = self.boxes[i as usize];
+            if !self.member(i) {
+                return false;
+            }
+            let (bl, bh) = self.bounds(i);
             !(bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y || clear(bl, bh))
         });
         out
@@ -571,7 +636,7 @@ impl<'a> Verifier<'a> {
             let mut ids = self.near(q, pe);
             // Nearest the stretch's start first (ties by id: deterministic).
             let dist = |i: u32| {
-                let (lo, hi) = self.boxes[i as usize];
+                let (lo, hi) = self.bounds(i);
                 (lo - q).max(q - hi).max(DVec2::ZERO).length_squared()
             };
             let mut keyed: Vec<(f64, u32)> = ids.iter().map(|&i| (dist(i), i)).collect();
@@ -579,9 +644,7 @@ impl<'a> Verifier<'a> {
             ids.clear();
             ids.extend(keyed.into_iter().map(|x| x.1));
             cache.polys.clear();
-            cache
-                .polys
-                .extend(ids.iter().map(|&i| self.blockers[i as usize]));
+            cache.polys.extend(ids.iter().map(|&i| self.poly(i)));
             cache.ids = ids;
             cache.span = (j, e.max(k));
         }
@@ -764,16 +827,16 @@ impl<'a> Verifier<'a> {
                 // Inside one blocker: the piece up to where the segment leaves it.
                 let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
                 let in_box = |i: u32, x: DVec2| {
-                    let (lo, hi) = self.boxes[i as usize];
+                    let (lo, hi) = self.bounds(i);
                     lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y
                 };
                 if let Some(&i) = ids.iter().find(|&&i| {
                     in_box(i, q) && in_box(i, p) && {
-                        let b = self.blockers[i as usize];
+                        let b = self.poly(i);
                         inside(b, q) && inside(b, p)
                     }
                 }) {
-                    let blk = self.blockers[i as usize];
+                    let blk = self.poly(i);
                     if blk.len() < 3 {
                         let exit = exit_param(blk, par, j);
                         let (e, pe) = self.furthest(par, k, p, exit, &|x| inside(blk, x));
@@ -797,9 +860,7 @@ impl<'a> Verifier<'a> {
                     return Some((k, p, used));
                 } else {
                     // Leaving a blocker, the chords are read from `p`, beyond its edge.
-                    let leaving = ids
-                        .iter()
-                        .any(|&i| in_box(i, q) && inside(self.blockers[i as usize], q));
+                    let leaving = ids.iter().any(|&i| in_box(i, q) && inside(self.poly(i), q));
                     let anchor = if leaving {
                         p
                     } else {
@@ -872,20 +933,20 @@ impl<'a> Verifier<'a> {
     fn across_two(&self, ids: &[u32], q: DVec2, p: DVec2) -> Option<(u32, u32)> {
         let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
         let in_box = |i: u32, x: DVec2| {
-            let (lo, hi) = self.boxes[i as usize];
+            let (lo, hi) = self.bounds(i);
             lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y
         };
         let holding = |x: DVec2| {
             ids.iter()
                 .copied()
-                .filter(move |&i| in_box(i, x) && inside(self.blockers[i as usize], x))
+                .filter(move |&i| in_box(i, x) && inside(self.poly(i), x))
         };
         for i in holding(q) {
             for j in holding(p) {
                 if i == j {
                     continue;
                 }
-                let (bi, bj) = (self.blockers[i as usize], self.blockers[j as usize]);
+                let (bi, bj) = (self.poly(i), self.poly(j));
                 let both: Vec<DVec2> = bi
                     .iter()
                     .chain(bj)
