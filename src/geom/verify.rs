@@ -215,8 +215,9 @@ struct NearCache<'a> {
     /// How far past a requested piece a new stretch reaches, in parameter steps.
     ahead: u64,
     ids: Vec<u32>,
-    /// The blockers of `ids`, in the same order.
+    /// The blockers of `ids`, in the same order, and their boxes.
     polys: Vec<&'a [DVec2]>,
+    boxes: Vec<(DVec2, DVec2)>,
 }
 
 /// How far ahead of the sweep the blockers near the segment are gathered at once, metres.
@@ -372,12 +373,16 @@ pub struct Verifier<'a> {
     min_step_m: f64,
 }
 
+/// A certificate's conditions and the blockers its chords lie in (shared, not copied, when a
+/// cached certificate is used again).
+type Cert = (std::rc::Rc<[Cond]>, std::rc::Rc<[u32]>);
+
 /// Certificates (their conditions) by where they held: each is listed in the buckets of the
 /// bounding box of the piece it certified, grown by [`CACHE_REACH_M`].
 #[derive(Default)]
 struct CertCache {
     /// Each certificate's conditions and the blockers (verifier indices) its chords lie in.
-    certs: Vec<(Vec<Cond>, Vec<u32>)>,
+    certs: Vec<Cert>,
     buckets: std::collections::HashMap<(i64, i64), Vec<u32>>,
 }
 
@@ -418,9 +423,9 @@ impl CertCache {
         )
     }
 
-    fn add(&mut self, conds: Vec<Cond>, used: Vec<u32>, p0: DVec2, p1: DVec2) {
+    fn add(&mut self, cert: Cert, p0: DVec2, p1: DVec2) {
         let id = self.certs.len() as u32;
-        self.certs.push((conds, used));
+        self.certs.push(cert);
         let r = DVec2::splat(CACHE_REACH_M);
         let (lo, hi) = (Self::key(p0.min(p1) - r), Self::key(p0.max(p1) + r));
         // Long pieces are listed along their length only (at most 64 buckets).
@@ -446,7 +451,7 @@ impl CertCache {
     /// The cached certificates that hold at every point of `pts` (newest first), if any.
     /// Of the newest [`CACHE_TRIES`] certificates listed where `q` is, one that holds at `q`
     /// and `p` and reaches furthest towards `b` ([`reach`]), with that reach.
-    fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(&(Vec<Cond>, Vec<u32>), f64)> {
+    fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(&Cert, f64)> {
         let ids = self.buckets.get(&Self::key(q))?;
         ids.iter()
             .rev()
@@ -626,7 +631,7 @@ impl<'a> Verifier<'a> {
         j: u64,
         k: u64,
         cache: &'c mut NearCache<'a>,
-    ) -> (&'c [u32], &'c [&'a [DVec2]]) {
+    ) -> (&'c [u32], &'c [&'a [DVec2]], &'c [(DVec2, DVec2)]) {
         if !(cache.span.0 <= j && k <= cache.span.1) {
             let end = k.max(j.saturating_add(cache.ahead)).min(END);
             let (e, pe) = par
@@ -645,10 +650,12 @@ impl<'a> Verifier<'a> {
             ids.extend(keyed.into_iter().map(|x| x.1));
             cache.polys.clear();
             cache.polys.extend(ids.iter().map(|&i| self.poly(i)));
+            cache.boxes.clear();
+            cache.boxes.extend(ids.iter().map(|&i| self.bounds(i)));
             cache.ids = ids;
             cache.span = (j, e.max(k));
         }
-        (&cache.ids, &cache.polys)
+        (&cache.ids, &cache.polys, &cache.boxes)
     }
 
     /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
@@ -701,6 +708,7 @@ impl<'a> Verifier<'a> {
             ahead: steps(NEAR_AHEAD_M),
             ids: Vec::new(),
             polys: Vec::new(),
+            boxes: Vec::new(),
         };
         // The last point that could not be certified, after which the sweep stepped on.
         let mut failed: Option<u64> = None;
@@ -728,9 +736,7 @@ impl<'a> Verifier<'a> {
                         Some((h, all)) if h.p1 == q => {
                             h.t1 = e as f64 / END as f64;
                             h.p1 = pe;
-                            all.extend(used);
-                            all.sort_unstable();
-                            all.dedup();
+                            all.extend_from_slice(&used);
                         }
                         _ => out.push((
                             Hidden {
@@ -739,7 +745,7 @@ impl<'a> Verifier<'a> {
                                 p0: q,
                                 p1: pe,
                             },
-                            used,
+                            used.to_vec(),
                         )),
                     }
                     j = e;
@@ -774,6 +780,10 @@ impl<'a> Verifier<'a> {
                 }
             }
         }
+        for (_, used) in &mut out {
+            used.sort_unstable();
+            used.dedup();
+        }
         out
     }
 
@@ -785,7 +795,7 @@ impl<'a> Verifier<'a> {
         (j, q): (u64, DVec2),
         probe: u64,
         cache: &mut NearCache<'a>,
-    ) -> Option<(u64, DVec2, Vec<u32>)> {
+    ) -> Option<(u64, DVec2, std::rc::Rc<[u32]>)> {
         // The probe point: the next exact point at least `probe` on (further when exact points
         // are sparse, far from the origin).
         let mut step = probe.max(1);
@@ -810,7 +820,7 @@ impl<'a> Verifier<'a> {
         (j, q): (u64, DVec2),
         (k, p): (u64, DVec2),
         cache: &mut NearCache<'a>,
-    ) -> Option<(u64, DVec2, Vec<u32>)> {
+    ) -> Option<(u64, DVec2, std::rc::Rc<[u32]>)> {
         // A certificate found before that holds here (it proves the piece as well as a new one).
         let remaining = q.distance(par.b);
         let cached = self
@@ -820,10 +830,10 @@ impl<'a> Verifier<'a> {
             .map(|(c, t)| (c.clone(), t));
         // A cached certificate that reaches only a little way: a new one may reach further.
         let cached = cached.filter(|(_, t)| t * remaining >= CACHE_ENOUGH_M);
-        let ((conds, used), fresh) = match cached {
+        let ((conds, used), fresh): (Cert, bool) = match cached {
             Some((c, _)) => (c, false),
             None => {
-                let (ids, near) = self.near_cached(par, j, k, cache);
+                let (ids, near, boxes) = self.near_cached(par, j, k, cache);
                 // Inside one blocker: the piece up to where the segment leaves it.
                 let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
                 let in_box = |i: u32, x: DVec2| {
@@ -840,7 +850,7 @@ impl<'a> Verifier<'a> {
                     if blk.len() < 3 {
                         let exit = exit_param(blk, par, j);
                         let (e, pe) = self.furthest(par, k, p, exit, &|x| inside(blk, x));
-                        return Some((e, pe, vec![i]));
+                        return Some((e, pe, [i].into()));
                     }
                     // A polygon is a certificate by itself: on no edge's outer side.
                     let n = blk.len();
@@ -850,14 +860,12 @@ impl<'a> Verifier<'a> {
                             v: blk[(e + 1) % n],
                             strict: false,
                         })
-                        .collect();
-                    ((conds, vec![i]), true)
+                        .collect::<Vec<Cond>>();
+                    ((conds.into(), [i].into()), true)
                 } else if let Some((i, j)) = self.across_two(ids, q, p) {
                     // From one blocker into one it meets: the piece is covered, and the sweep
                     // goes on from p (inside the second).
-                    let mut used = vec![i, j];
-                    used.sort_unstable();
-                    return Some((k, p, used));
+                    return Some((k, p, [i.min(j), i.max(j)].into()));
                 } else {
                     // Leaving a blocker, the chords are read from `p`, beyond its edge.
                     let leaving = ids.iter().any(|&i| in_box(i, q) && inside(self.poly(i), q));
@@ -899,18 +907,17 @@ impl<'a> Verifier<'a> {
                         Some((c, used))
                     };
                     let search = |near: &[&[DVec2]]| -> Option<(Vec<Cond>, Vec<u32>)> {
-                        let first = self.chain(near, &pts, false)?;
+                        let first = self.chain(near, boxes, &pts, false)?;
                         match with_used(&first) {
                             Some(c) => Some(c),
-                            None => with_used(&self.chain(near, &pts, true)?),
+                            None => with_used(&self.chain(near, boxes, &pts, true)?),
                         }
                     };
                     // The blockers nearest the point first (the stretch's order, by distance
                     // from its start): they subtend the widest angles, and a few of them often
                     // cover the cell.
-                    let found = search(near);
-                    let conds = found?;
-                    (conds, true)
+                    let (conds, used) = search(near)?;
+                    ((conds.into(), used.into()), true)
                 }
             }
         };
@@ -919,7 +926,7 @@ impl<'a> Verifier<'a> {
         let est = j + ((END - j) as f64 * t) as u64;
         let (e, pe) = self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x)));
         if fresh {
-            self.cache.borrow_mut().add(conds, used.clone(), q, pe);
+            self.cache.borrow_mut().add((conds, used.clone()), q, pe);
         }
         Some((e, pe, used))
     }
@@ -1004,7 +1011,13 @@ impl<'a> Verifier<'a> {
     /// `pts`: the chords seen from `pts[0]` are read nearest blocker first until their
     /// floating-point spans cover the cell's angle, then [`Self::cover`] picks a chain among
     /// them and checks every condition exactly. Floating point only chooses what is tried.
-    fn chain(&self, near: &[&[DVec2]], pts: &[DVec2; 3], multi: bool) -> Option<Vec<Link>> {
+    fn chain(
+        &self,
+        near: &[&[DVec2]],
+        boxes: &[(DVec2, DVec2)],
+        pts: &[DVec2; 3],
+        multi: bool,
+    ) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
         let (cl, cr) = guess_tangents(q, self.cell)?;
@@ -1096,7 +1109,7 @@ impl<'a> Verifier<'a> {
             if poly + 1 >= next || last {
                 next *= 2;
                 if (last || covered(&mut spans)) && !arcs.is_empty() {
-                    if let Some(path) = self.cover(near, pts, &mut arcs, &mut seps) {
+                    if let Some(path) = self.cover(near, boxes, pts, &mut arcs, &mut seps) {
                         return Some(path);
                     }
                 }
@@ -1111,6 +1124,7 @@ impl<'a> Verifier<'a> {
     fn cover(
         &self,
         near: &[&[DVec2]],
+        boxes: &[(DVec2, DVec2)],
         pts: &[DVec2; 3],
         arcs: &mut [Link],
         seps: &mut [Option<Option<SepLine>>],
@@ -1130,7 +1144,6 @@ impl<'a> Verifier<'a> {
         // (convexity), are valid by (A), and make (O) hold trivially. Adjacent convex pieces of one footprint, and
         // buildings that share a wall, meet like this; across the line of a shared edge the
         // extreme vertices swap, and only such a join certifies both sides at once.
-        let boxes: Vec<(DVec2, DVec2)> = near.iter().map(|p| bbox(p)).collect();
         let shared = |a: &Link, b: &Link| -> Option<DVec2> {
             let ((al, ah), (bl, bh)) = (boxes[a.poly], boxes[b.poly]);
             if al.x > bh.x || bl.x > ah.x || al.y > bh.y || bl.y > ah.y {
