@@ -303,13 +303,22 @@ impl Grid {
         )
     }
 
-    /// Ids of the boxes listed in the buckets meeting `[lo, hi]`, ascending, each once.
-    fn query(&self, lo: DVec2, hi: DVec2, keep: &dyn Fn(DVec2, DVec2) -> bool) -> Vec<u32> {
+    /// Calls `f` once for each box listed in a bucket meeting `[lo, hi]` that `keep` accepts
+    /// (buckets by their bounds), in bucket order; `seen` (one stamp per box) marks those
+    /// already met, with `stamp`, which must differ from every earlier query's.
+    fn query(
+        &self,
+        lo: DVec2,
+        hi: DVec2,
+        keep: &dyn Fn(DVec2, DVec2) -> bool,
+        seen: &mut [u32],
+        stamp: u32,
+        mut f: impl FnMut(u32),
+    ) {
         if self.nx == 0 {
-            return Vec::new();
+            return;
         }
         let (x0, y0, x1, y1) = self.range(lo, hi);
-        let mut out = Vec::new();
         for y in y0..=y1 {
             for x in x0..=x1 {
                 let b0 = self.lo + DVec2::new(x as f64, y as f64) * self.size;
@@ -317,14 +326,14 @@ impl Grid {
                     continue;
                 }
                 let k = y * self.nx + x;
-                out.extend_from_slice(
-                    &self.ids[self.start[k] as usize..self.start[k + 1] as usize],
-                );
+                for &i in &self.ids[self.start[k] as usize..self.start[k + 1] as usize] {
+                    if seen[i as usize] != stamp {
+                        seen[i as usize] = stamp;
+                        f(i);
+                    }
+                }
             }
         }
-        out.sort_unstable();
-        out.dedup();
-        out
     }
 }
 
@@ -371,6 +380,8 @@ pub struct Verifier<'a> {
     /// Least step past a point it cannot certify, and the precision to which the end of a
     /// hidden part is sought, metres ([`MIN_PIECE_M`]).
     min_step_m: f64,
+    /// Scratch of [`Self::near`]: a stamp per blocker of the index, and the last stamp used.
+    seen: std::cell::RefCell<(Vec<u32>, u32)>,
 }
 
 /// A certificate's conditions and the blockers its chords lie in (shared, not copied, when a
@@ -541,6 +552,7 @@ impl<'a> Verifier<'a> {
             cache: Default::default(),
             max_step_m: MAX_STEP_M,
             min_step_m: MIN_PIECE_M,
+            seen: Default::default(),
         }
     }
 
@@ -612,14 +624,25 @@ impl<'a> Verifier<'a> {
                 n.x * x + n.y * y > c
             })
         };
-        let mut out = self.index().grid.query(lo, hi, &|bl, bh| !clear(bl, bh));
-        out.retain(|&i| {
-            if !self.member(i) {
-                return false;
-            }
-            let (bl, bh) = self.bounds(i);
-            !(bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y || clear(bl, bh))
-        });
+        let mut out = Vec::new();
+        let mut seen = self.seen.borrow_mut();
+        let (stamps, stamp) = &mut *seen;
+        if stamps.len() != self.index().len() || *stamp == u32::MAX {
+            *stamps = vec![0; self.index().len()];
+            *stamp = 0;
+        }
+        *stamp += 1;
+        self.index()
+            .grid
+            .query(lo, hi, &|bl, bh| !clear(bl, bh), stamps, *stamp, |i| {
+                if !self.member(i) {
+                    return;
+                }
+                let (bl, bh) = self.bounds(i);
+                if !(bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y || clear(bl, bh)) {
+                    out.push(i);
+                }
+            });
         out
     }
 
