@@ -220,6 +220,8 @@ struct NearCache<'a> {
     boxes: Vec<(DVec2, DVec2)>,
 }
 
+/// How many of a stretch's blockers are put in order of distance (the rest follow unordered).
+pub const NEAREST_SORTED: usize = 48;
 /// How far ahead of the sweep the blockers near the segment are gathered at once, metres.
 pub const NEAR_AHEAD_M: f64 = 48.0;
 
@@ -668,7 +670,15 @@ impl<'a> Verifier<'a> {
                 (lo - q).max(q - hi).max(DVec2::ZERO).length_squared()
             };
             let mut keyed: Vec<(f64, u32)> = ids.iter().map(|&i| (dist(i), i)).collect();
-            keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let by = |a: &(f64, u32), b: &(f64, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+            // The search reads the nearest first and mostly stops among them: only those are
+            // put in order, the rest follow in a fixed order (deterministic all the same).
+            if keyed.len() > NEAREST_SORTED {
+                keyed.select_nth_unstable_by(NEAREST_SORTED, by);
+                keyed[..NEAREST_SORTED].sort_unstable_by(by);
+            } else {
+                keyed.sort_unstable_by(by);
+            }
             ids.clear();
             ids.extend(keyed.into_iter().map(|x| x.1));
             cache.polys.clear();
