@@ -386,6 +386,30 @@ pub struct Verifier<'a> {
     seen: std::cell::RefCell<(Vec<u32>, u32)>,
 }
 
+/// A cheap hasher for the certificate cache's bucket keys (pairs of small integers from the
+/// verifier's own coordinates; no untrusted keys reach it, so no need for a keyed hash).
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl std::hash::Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_i64(&mut self, x: i64) {
+        self.write_u64(x as u64);
+    }
+}
+
+type BuildKeyHasher = std::hash::BuildHasherDefault<KeyHasher>;
+
 /// A certificate's conditions and the blockers its chords lie in (shared, not copied, when a
 /// cached certificate is used again).
 type Cert = (std::rc::Rc<[Cond]>, std::rc::Rc<[u32]>);
@@ -396,7 +420,7 @@ type Cert = (std::rc::Rc<[Cond]>, std::rc::Rc<[u32]>);
 struct CertCache {
     /// Each certificate's conditions and the blockers (verifier indices) its chords lie in.
     certs: Vec<Cert>,
-    buckets: std::collections::HashMap<(i64, i64), Vec<u32>>,
+    buckets: std::collections::HashMap<(i64, i64), Vec<u32>, BuildKeyHasher>,
 }
 
 /// A new certificate is first sought among this many blockers nearest the point.
