@@ -897,12 +897,21 @@ impl<'a> Verifier<'a> {
                     let (lo, hi) = self.bounds(i);
                     lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y
                 };
-                if let Some(&i) = ids.iter().find(|&&i| {
-                    in_box(i, q) && in_box(i, p) && {
-                        let b = self.poly(i);
-                        inside(b, q) && inside(b, p)
-                    }
-                }) {
+                // The blockers holding q, and (when there are any) those holding p, in the
+                // stretch's order.
+                let holding = |x: DVec2| -> Vec<u32> {
+                    ids.iter()
+                        .copied()
+                        .filter(|&i| in_box(i, x) && inside(self.poly(i), x))
+                        .collect()
+                };
+                let at_q = holding(q);
+                let at_p = if at_q.is_empty() {
+                    Vec::new()
+                } else {
+                    holding(p)
+                };
+                if let Some(&i) = at_q.iter().find(|i| at_p.contains(i)) {
                     let blk = self.poly(i);
                     if blk.len() < 3 {
                         let exit = exit_param(blk, par, j);
@@ -919,13 +928,13 @@ impl<'a> Verifier<'a> {
                         })
                         .collect::<Vec<Cond>>();
                     ((conds.into(), [i].into()), true)
-                } else if let Some((i, j)) = self.across_two(ids, q, p) {
+                } else if let Some((i, j)) = self.across_two(&at_q, &at_p, q, p) {
                     // From one blocker into one it meets: the piece is covered, and the sweep
                     // goes on from p (inside the second).
                     return Some((k, p, [i.min(j), i.max(j)].into()));
                 } else {
                     // Leaving a blocker, the chords are read from `p`, beyond its edge.
-                    let leaving = ids.iter().any(|&i| in_box(i, q) && inside(self.poly(i), q));
+                    let leaving = !at_q.is_empty();
                     let anchor = if leaving {
                         p
                     } else {
@@ -988,25 +997,17 @@ impl<'a> Verifier<'a> {
         Some((e, pe, used))
     }
 
-    /// The two blockers whose union holds `[q, p]`, if any: `q` in one, `p` in another, and the
+    /// The two blockers whose union holds `[q, p]`, if any: `q` in one of `at_q`, `p` in another
+    /// of `at_p` (the blockers holding each), and the
     /// segment crosses a segment `[u, v]` between two vertices that both blockers contain (the
     /// shared edge of two pieces of one footprint, or where two blockers overlap). *Proof.* The
     /// crossing `x` lies in `[u, v]`, which lies in both blockers (convex, closed); so `[q, x]`
     /// lies in the first and `[x, p]` in the second, and every point of `[q, p]` is in a
     /// blocker, hence hidden (touching counts). All tests are exact.
-    fn across_two(&self, ids: &[u32], q: DVec2, p: DVec2) -> Option<(u32, u32)> {
+    fn across_two(&self, at_q: &[u32], at_p: &[u32], q: DVec2, p: DVec2) -> Option<(u32, u32)> {
         let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
-        let in_box = |i: u32, x: DVec2| {
-            let (lo, hi) = self.bounds(i);
-            lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y
-        };
-        let holding = |x: DVec2| {
-            ids.iter()
-                .copied()
-                .filter(move |&i| in_box(i, x) && inside(self.poly(i), x))
-        };
-        for i in holding(q) {
-            for j in holding(p) {
+        for &i in at_q {
+            for &j in at_p {
                 if i == j {
                     continue;
                 }
