@@ -1095,7 +1095,7 @@ impl<'a> Verifier<'a> {
             }
         };
         let (ucl, ucr) = (u(cl), u(cr));
-        let mut spans: Vec<(f64, f64)> = Vec::new();
+        let mut spans: Vec<(f64, f64)> = Vec::with_capacity(near.len().min(64));
         let covered = |spans: &mut Vec<(f64, f64)>| {
             spans.sort_by(|a, b| a.0.total_cmp(&b.0));
             let mut reach = ucl;
@@ -1111,7 +1111,7 @@ impl<'a> Verifier<'a> {
             reach >= ucr
         };
         let mut seps: Vec<Option<Option<SepLine>>> = vec![None; near.len()];
-        let mut arcs: Vec<Link> = Vec::new();
+        let mut arcs: Vec<Link> = Vec::with_capacity(2 * near.len().min(64));
         let mut next = 8usize;
         for (poly, b) in near.iter().enumerate() {
             if let Some((l, r)) = guess_tangents(q, b) {
@@ -1222,7 +1222,7 @@ impl<'a> Verifier<'a> {
         // furthest, while it advances.
         let further = |x: &Link, y: &Link| guess(q, y.r, x.r) == Ccw;
         let mut usable = vec![true; arcs.len()];
-        let mut path: Vec<Link> = Vec::new();
+        let mut path: Vec<Link> = Vec::with_capacity(8);
         let greedy = loop {
             let prev = path.last().copied();
             let mut best: Option<usize> = None;
