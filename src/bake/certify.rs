@@ -113,8 +113,9 @@ impl<'a> Certifier<'a> {
                 .filter(|&i| self.blockers[i as usize].1.supports(e0, e1, g, h, dn))
                 .collect();
             Verifier::subset(self.cell, self.index, &ids)
-                // Pieces shorter than MIN_PIECE_M are dropped anyway.
-                .with_max_step(0.5 * MIN_PIECE_M)
+                // Pieces shorter than MIN_PIECE_M are dropped anyway: the sweep may step that far
+                // past points it cannot certify.
+                .with_max_step(MIN_PIECE_M)
                 .with_min_step(MIN_STEP_M)
         })
     }
@@ -270,7 +271,7 @@ impl<'a> Certifier<'a> {
                             .collect();
                         stats.checks += 1;
                         let v = Verifier::subset(self.cell, self.index, &ids)
-                            .with_max_step(0.5 * MIN_PIECE_M);
+                            .with_max_step(MIN_PIECE_M);
                         match v.hidden_by(qa, qb) {
                             Some(u) => {
                                 q.level = next.max(top_of(&u));
