@@ -348,7 +348,7 @@ mod tests {
         // 10 m at its nearest: lambda <= 1 - 10 / 30.
         let (a, b) = (DVec2::new(-50.0, 30.0), DVec2::new(50.0, 30.0));
         let l = line_lambda(&cell, &sq(0.0, 10.0, 10.0), a, b);
-        assert!(l >= 2.0 / 3.0 && l < 2.0 / 3.0 + 1e-6, "{l}");
+        assert!((2.0 / 3.0..2.0 / 3.0 + 1e-6).contains(&l), "{l}");
         // Either orientation of the VO.
         assert_eq!(line_lambda(&cell, &sq(0.0, 10.0, 10.0), b, a), l);
         // A blocker reaching the line, or a line through the cell: 1.

@@ -413,6 +413,8 @@ type BuildKeyHasher = std::hash::BuildHasherDefault<KeyHasher>;
 /// A certificate's conditions and the blockers its chords lie in (shared, not copied, when a
 /// cached certificate is used again).
 type Cert = (std::rc::Rc<[Cond]>, std::rc::Rc<[u32]>);
+/// The near blockers of a piece: their ids, outlines and boxes, in the same order.
+type Near<'c, 'a> = (&'c [u32], &'c [&'a [DVec2]], &'c [(DVec2, DVec2)]);
 
 /// Certificates (their conditions) by where they held: each is listed in the buckets of the
 /// bounding box of the piece it certified, grown by [`CACHE_REACH_M`].
@@ -680,7 +682,7 @@ impl<'a> Verifier<'a> {
         j: u64,
         k: u64,
         cache: &'c mut NearCache<'a>,
-    ) -> (&'c [u32], &'c [&'a [DVec2]], &'c [(DVec2, DVec2)]) {
+    ) -> Near<'c, 'a> {
         if !(cache.span.0 <= j && k <= cache.span.1) {
             let end = k.max(j.saturating_add(cache.ahead)).min(END);
             let (e, pe) = par
