@@ -24,7 +24,7 @@ use super::bound::{
 };
 use super::metrics::{
     cell_vs, compare, eval_cell, object_boxes, percentile, pvs_from_geoms, sample_cells, summarize,
-    vo_rays_all, CellEval, Summary,
+    vo_rays_all, CellEval, Summary, VoRays,
 };
 use super::plot::{cell_map, chart, Series};
 use super::raycast::Caster;
@@ -573,6 +573,7 @@ pub fn dataset_section(
         md,
         "{HEAD} bake ms/cell (median) | bytes/cell |\n{RULE}---|---|"
     );
+    let mut size_rays: Vec<(f64, VoRays)> = Vec::new();
     for size in [50.0, 100.0, 200.0] {
         progress(&format!("{}: {size} m cells", d.name));
         let params = BakeParams {
@@ -597,6 +598,14 @@ pub fn dataset_section(
             visible_sets(&s, &st, &caster, &ids, &p.truth)
         };
         let sv = summarize(&s, &eval_cells(&s, &st, &tree, &ids, &vs));
+        size_rays.push((
+            size,
+            if size == 100.0 {
+                rays
+            } else {
+                vo_rays_all(&caster, &st, &ids, 16, 16, p.seed)
+            },
+        ));
         let ms = bake_ms(&v.cells).0;
         // Bytes per baked cell: index byte plus its record.
         let bytes = v
@@ -613,6 +622,18 @@ pub fn dataset_section(
         );
         speed.push((format!("{size} m cells"), ms, 100.0 * sv.occluded_share));
     }
+    let _ = writeln!(
+        md,
+        "\n3D check of the stored VOs at each size (DESIGN.md 6.2; 16 eye points per cell to 16 points of each VO quad): {}.",
+        size_rays
+            .iter()
+            .map(|(size, r)| format!(
+                "{size} m, {} rays, {} reached a VO without meeting the original geometry first",
+                r.rays, r.reached
+            ))
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
     let _ = writeln!(md);
 
     // Plots: speed against error; the cell map.
