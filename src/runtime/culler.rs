@@ -25,9 +25,9 @@
 //!   returned), every object of a skipped cell, of a cell without VOs and of a cell id outside
 //!   the frame's grid;
 //! - a query allocates nothing beyond growing `out` (which also holds a bitmap of the visible
-//!   objects while the query runs, so no sort is needed); the traversal stack is a fixed array (the
-//!   median split bounds the depth by `log2` of the box count; past the array, a subtree is
-//!   returned whole, which is conservative).
+//!   objects while the query runs, so no sort is needed); the traversal stack is a fixed array
+//!   (the build bounds the depth, `STACK`; past the array, a subtree would be returned whole,
+//!   which is conservative).
 
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::{Frame, MAX_VOS_PER_CELL};
@@ -36,24 +36,41 @@ use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe};
 
 /// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
 /// leaf kept, for `Hidden` alone, from memory laid out in tree order): on the generated 10^5
-/// city, with nodes of 4 children, leaves of 8 take 2.03M instructions per cell entry in
-/// [`pvs`] (callgrind), leaves of 4 2.16M, of 6 2.04M, of 12 2.13M, of 16 2.18M.
+/// city, with nodes of 4 children and the median split, leaves of 8 took 2.03M instructions per
+/// cell entry in [`pvs`] (callgrind), leaves of 4 2.16M, of 6 2.04M, of 12 2.13M, of 16 2.18M;
+/// with the binned split, 6, 8 and 12 are within 1% of each other.
 pub const LEAF_SIZE: usize = 8;
-/// How a metre of box top weighs against a metre of horizontal extent when a node picks its
-/// split axis. Splitting by top puts boxes of like heights together, so rule 3's height test
-/// decides more groups whole (a node hidden, or too tall for a VO): on the generated 10^5 city,
-/// 10 takes about two thirds of the nodes and time of 1.
+/// How a metre of box top weighs against a metre of horizontal extent in the key a box is
+/// split by ([`centre`]) when the median split picks its axis. Splitting by top puts boxes of
+/// like heights together, so rule 3's height test decides more groups whole (a node hidden, or
+/// too tall for a VO): on the generated 10^5 city, 10 took about two thirds of the nodes and
+/// time of 1.
 const TOP_WEIGHT: f64 = 10.0;
-/// Children per node, at most: the binary median-split tree with its every other level left
-/// out. A node's test costs the same whatever its size, and most tested nodes straddle an
-/// umbra's edge, so fewer levels test fewer nodes: on the generated 10^5 city, 4,013 nodes
-/// and 2.03M instructions per cell entry against 4,970 and 2.31M with 2 children (8: 4,077
-/// and 2.02M, no better).
+/// Bins of keys per axis in [`binned_split`]: 32 tests 2% fewer nodes than 16.
+const SPLIT_BINS: usize = 32;
+/// How a metre of spread in the tops of a group weighs against a metre of its footprint's
+/// half-perimeter in [`Bin::cost`]. On the generated 10^5 city, 5, 7, 10 and 14 give 1.68M,
+/// 1.65M, 1.69M and 1.72M instructions per cell entry (callgrind, our timing loop).
+const TOPS_COST: f64 = 7.0;
+/// The least share of a node's boxes on each side of a binned split: 0.05, 0.1 and 0.2 give
+/// 1.65M, 1.66M and 1.72M instructions per cell entry; 0.1 keeps the tree shallower.
+const MIN_SIDE: f64 = 0.1;
+/// Binary levels that [`binned_split`] may split; below them the median split, whose depth is
+/// `log2`, takes over, so a tree is at most `BINNED_LEVELS + 30` binary levels deep for `u32`
+/// indices.
+const BINNED_LEVELS: usize = 48;
+/// Children per node, at most: the binary tree with its every other level left out. A node's
+/// test costs the same whatever its size, and most tested nodes straddle an umbra's edge, so
+/// fewer levels test fewer nodes: on the generated 10^5 city with the median split, 4,013
+/// nodes and 2.03M instructions per cell entry against 4,970 and 2.31M with 2 children (8:
+/// 4,077 and 2.02M, no better).
 const WIDTH: usize = 4;
-/// Depth of the traversal stack. A median split over `n` boxes is `ceil(log2(n / LEAF_SIZE))`
-/// binary levels deep, at most 30 for `u32` indices, so at most 15 levels of [`WIDTH`] 4; the
-/// walk holds at most 3 siblings of each node of its path, and the children of the last.
-const STACK: usize = 64;
+/// Depth of the traversal stack. A tree is at most `BINNED_LEVELS + 30 = 78` binary levels
+/// deep, and each level of [`WIDTH`] 4 takes two binary levels off every path that goes on
+/// below it, so at most 40 levels of nodes; the walk holds at most 3 siblings of each node of
+/// its path, and the children of the last: 124.
+const STACK: usize = 128;
+const _: () = assert!(STACK >= 3 * (1 + (BINNED_LEVELS + 30).div_ceil(2)) + WIDTH);
 
 /// One node of the flat hierarchy. Its subtree's boxes are `start..end` in tree order; its
 /// children's ranges follow each other in that order.
@@ -117,9 +134,10 @@ fn centre(b: &[f64; 6], axis: usize) -> f64 {
 }
 
 impl BoxTree {
-    /// Builds the hierarchy over `boxes` (local frame): median split of the boxes' keys
-    /// ([`centre`]: x, y, and the top weighted by [`TOP_WEIGHT`]) along their longest extent,
-    /// leaves of at most [`LEAF_SIZE`] boxes.
+    /// Builds the hierarchy over `boxes` (local frame), leaves of at most [`LEAF_SIZE`] boxes.
+    /// A node's boxes are split by [`binned_split`] (the least cost of groups that umbras'
+    /// edges cross) in its first [`BINNED_LEVELS`] binary levels, else at the median of their
+    /// keys ([`centre`]: x, y, and the top weighted by [`TOP_WEIGHT`]) along the longest extent.
     ///
     /// # Panics
     /// With more than `u32::MAX` boxes (object indices are `u32`).
@@ -152,8 +170,8 @@ impl BoxTree {
                 right: LEAF,
             };
             nodes.push(blank);
-            let mut todo = vec![(0usize, 0usize, items.len())];
-            while let Some((ni, s, e)) = todo.pop() {
+            let mut todo = vec![(0usize, 0usize, items.len(), 0usize)];
+            while let Some((ni, s, e, depth)) = todo.pop() {
                 let part = &mut items[s..e];
                 let mut bounds = part[0].1;
                 let mut min_top = f64::INFINITY;
@@ -180,20 +198,28 @@ impl BoxTree {
                     ..blank
                 };
                 if e - s > LEAF_SIZE {
-                    let axis = (0..3)
-                        .max_by(|&a, &b| (cmax[a] - cmin[a]).total_cmp(&(cmax[b] - cmin[b])))
-                        .unwrap_or(0);
-                    let half = (e - s) / 2;
-                    part.select_nth_unstable_by(half, |a, b| {
-                        centre(&a.1, axis).total_cmp(&centre(&b.1, axis))
+                    let binned = if depth < BINNED_LEVELS {
+                        binned_split(part, &cmin, &cmax)
+                    } else {
+                        None
+                    };
+                    let half = binned.unwrap_or_else(|| {
+                        let axis = (0..3)
+                            .max_by(|&a, &b| (cmax[a] - cmin[a]).total_cmp(&(cmax[b] - cmin[b])))
+                            .unwrap_or(0);
+                        let half = (e - s) / 2;
+                        part.select_nth_unstable_by(half, |a, b| {
+                            centre(&a.1, axis).total_cmp(&centre(&b.1, axis))
+                        });
+                        half
                     });
                     let left = nodes.len();
                     nodes.push(blank);
                     nodes.push(blank);
                     node.left = left as u32;
                     node.right = left as u32 + 1;
-                    todo.push((left + 1, s + half, e));
-                    todo.push((left, s, s + half));
+                    todo.push((left + 1, s + half, e, depth + 1));
+                    todo.push((left, s, s + half, depth + 1));
                 }
                 nodes[ni] = node;
             }
@@ -251,6 +277,115 @@ impl BoxTree {
         }
         best
     }
+}
+
+/// A bin of [`binned_split`]: the footprint bounds, the spread of tops and the number of the
+/// boxes whose keys fall in it (or in a run of bins).
+#[derive(Clone, Copy)]
+struct Bin {
+    lo: [f64; 2],
+    hi: [f64; 2],
+    top_lo: f64,
+    top_hi: f64,
+    n: usize,
+}
+
+impl Bin {
+    const EMPTY: Bin = Bin {
+        lo: [f64::INFINITY; 2],
+        hi: [f64::NEG_INFINITY; 2],
+        top_lo: f64::INFINITY,
+        top_hi: f64::NEG_INFINITY,
+        n: 0,
+    };
+
+    fn add(&mut self, b: &[f64; 6]) {
+        for k in 0..2 {
+            self.lo[k] = self.lo[k].min(b[k]);
+            self.hi[k] = self.hi[k].max(b[k + 3]);
+        }
+        self.top_lo = self.top_lo.min(b[5]);
+        self.top_hi = self.top_hi.max(b[5]);
+        self.n += 1;
+    }
+
+    fn merge(mut self, o: &Bin) -> Bin {
+        for k in 0..2 {
+            self.lo[k] = self.lo[k].min(o.lo[k]);
+            self.hi[k] = self.hi[k].max(o.hi[k]);
+        }
+        self.top_lo = self.top_lo.min(o.top_lo);
+        self.top_hi = self.top_hi.max(o.top_hi);
+        self.n += o.n;
+        self
+    }
+
+    /// The boxes times their group's half-perimeter and weighted spread of tops.
+    fn cost(&self) -> f64 {
+        let size = (self.hi[0] - self.lo[0])
+            + (self.hi[1] - self.lo[1])
+            + TOPS_COST * (self.top_hi - self.top_lo);
+        self.n as f64 * size
+    }
+}
+
+/// Splits `part` (more than [`LEAF_SIZE`] boxes, keys within `cmin..=cmax` per axis) in two by
+/// the cost of [`Bin::cost`]: over [`SPLIT_BINS`] bins of the keys along each axis, the
+/// boundary between bins with the least summed cost of the two sides, each side holding at
+/// least [`MIN_SIDE`] of the boxes. Reorders `part` so the left side comes first and returns its
+/// length, or `None` (`part` untouched) when no boundary qualifies.
+///
+/// Why this cost: a node is tested when its parent is, and a parent's children are tested
+/// when an umbra's edge or its height bound crosses the parent. For a random line the chance of
+/// crossing a convex footprint is proportional to its perimeter (Cauchy–Crofton), and the
+/// spread of tops is what rule 3's height bound splits; each box pays for the groups above it.
+fn binned_split(part: &mut [(u32, [f64; 6])], cmin: &[f64; 3], cmax: &[f64; 3]) -> Option<usize> {
+    let n = part.len();
+    let least = ((MIN_SIDE * n as f64).ceil() as usize).max(1);
+    let mut best: Option<(f64, usize, usize)> = None;
+    for axis in 0..3 {
+        let (lo, hi) = (cmin[axis], cmax[axis]);
+        if !(hi > lo) {
+            continue;
+        }
+        let scale = SPLIT_BINS as f64 / (hi - lo);
+        let bin = |b: &[f64; 6]| (((centre(b, axis) - lo) * scale) as usize).min(SPLIT_BINS - 1);
+        let mut bins = [Bin::EMPTY; SPLIT_BINS];
+        for (_, b) in part.iter() {
+            bins[bin(b)].add(b);
+        }
+        // `right[i]`: bins i.. together.
+        let mut right = [Bin::EMPTY; SPLIT_BINS];
+        let mut acc = Bin::EMPTY;
+        for i in (0..SPLIT_BINS).rev() {
+            acc = acc.merge(&bins[i]);
+            right[i] = acc;
+        }
+        let mut left = Bin::EMPTY;
+        for i in 0..SPLIT_BINS - 1 {
+            left = left.merge(&bins[i]);
+            let r = &right[i + 1];
+            if left.n < least || r.n < least {
+                continue;
+            }
+            let cost = left.cost() + r.cost();
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, i));
+            }
+        }
+    }
+    let (_, axis, last) = best?;
+    let (lo, hi) = (cmin[axis], cmax[axis]);
+    let scale = SPLIT_BINS as f64 / (hi - lo);
+    let bin = |b: &[f64; 6]| (((centre(b, axis) - lo) * scale) as usize).min(SPLIT_BINS - 1);
+    let mut k = 0;
+    for j in 0..n {
+        if bin(&part[j].1) <= last {
+            part.swap(j, k);
+            k += 1;
+        }
+    }
+    Some(k)
 }
 
 /// The nodes of [`WIDTH`] children from the binary tree `bin` (root 0): each node's children
@@ -811,26 +946,46 @@ mod tests {
         assert!(tot.boxes_tested < n, "{tot:?} of {n}");
     }
 
-    /// Most levels of nodes over `n` boxes: the median split's binary levels,
-    /// `ceil(log2(n / LEAF_SIZE))`, taken `log2(WIDTH)` at a time, and the root.
+    /// Most levels of nodes over `n` boxes. Every split leaves at most 90% of a node's boxes
+    /// on each side ([`MIN_SIDE`]; the median split too, above [`LEAF_SIZE`]), and only the
+    /// first [`BINNED_LEVELS`] binary levels split by cost; each level of nodes takes two binary
+    /// levels off a path that goes on below it.
     fn depth_bound(n: usize) -> usize {
-        let binary = (n.div_ceil(LEAF_SIZE) as f64).log2().ceil() as usize;
-        1 + binary.div_ceil(WIDTH.ilog2() as usize)
+        let leaves = n.div_ceil(LEAF_SIZE) as f64;
+        let shrink = 1 + (leaves.ln() / (1.0 / (1.0 - MIN_SIDE)).ln()).ceil() as usize;
+        let median = BINNED_LEVELS + leaves.log2().ceil() as usize;
+        1 + shrink.min(median).div_ceil(2)
     }
 
     #[test]
-    fn tree_is_balanced() {
+    fn tree_depth_is_bounded() {
         let mut r = Lcg(1);
         for n in [1usize, 8, 9, 100, 10_000] {
-            let boxes: Vec<[f64; 6]> = (0..n)
+            // Boxes along a line, and a dense cluster with a few far outliers (where a split by
+            // cost is most lopsided).
+            let line: Vec<[f64; 6]> = (0..n)
                 .map(|_| {
                     let x = r.range(0.0, 1000.0);
                     [x, 0.0, 0.0, x + 1.0, 1.0, 1.0]
                 })
                 .collect();
-            let t = BoxTree::new(&boxes);
-            let bound = depth_bound(n);
-            assert!(t.depth() <= bound, "n = {n}: depth {} > {bound}", t.depth());
+            let cluster: Vec<[f64; 6]> = (0..n)
+                .map(|i| {
+                    let x = if i % 50 == 0 {
+                        r.range(0.0, 1e5)
+                    } else {
+                        r.range(0.0, 10.0)
+                    };
+                    let top = r.range(1.0, 60.0);
+                    [x, x, 0.0, x + 1.0, x + 1.0, top]
+                })
+                .collect();
+            for boxes in [line, cluster] {
+                let t = BoxTree::new(&boxes);
+                let bound = depth_bound(n);
+                assert!(t.depth() <= bound, "n = {n}: depth {} > {bound}", t.depth());
+                assert!(3 * t.depth() + WIDTH <= STACK);
+            }
         }
         // Identical boxes split too.
         let t = BoxTree::new(&vec![[0.0, 0.0, 0.0, 1.0, 1.0, 1.0]; 1000]);
