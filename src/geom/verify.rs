@@ -1098,8 +1098,11 @@ impl<'a> Verifier<'a> {
         };
         let (ucl, ucr) = (u(cl), u(cr));
         let mut spans: Vec<(f64, f64)> = Vec::with_capacity(near.len().min(64));
+        // Whether the spans, swept in order of their starts, reach from `ucl` to `ucr`. Spans
+        // with equal starts may come in any order (the sweep's answer is the same), so an
+        // unstable sort, which needs no scratch buffer, does.
         let covered = |spans: &mut Vec<(f64, f64)>| {
-            spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+            spans.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
             let mut reach = ucl;
             for &(a, b) in spans.iter() {
                 if a > reach {
@@ -1368,7 +1371,12 @@ fn separating_line(b: &[DVec2], cell: &[DVec2], qs: &[DVec2]) -> Option<SepLine>
 /// checked with the exact [`orient`], so a wrong guess can only lose a certificate.
 #[inline]
 fn guess(a: DVec2, b: DVec2, c: DVec2) -> Orientation {
-    let d = (b - a).perp_dot(c - a);
+    sign((b - a).perp_dot(c - a))
+}
+
+/// The orientation a floating-point determinant `d` stands for (NaN: collinear).
+#[inline]
+fn sign(d: f64) -> Orientation {
     if d > 0.0 {
         Orientation::Ccw
     } else if d < 0.0 {
@@ -1380,26 +1388,50 @@ fn guess(a: DVec2, b: DVec2, c: DVec2) -> Orientation {
 
 /// [`tangent_vertices`] with [`guess`]: the extreme vertices of `poly` seen from `q`, or `None`
 /// when `q` seems to be inside or on it.
+///
+/// This runs for every blocker the search reads, so it computes each `poly[i] - q` once:
+/// `guess(q, poly[l], poly[i])` is `(poly[l] - q).perp_dot(poly[i] - q)`, the same operations
+/// on the same values, so the same bits and the same answers.
 fn guess_tangents(q: DVec2, poly: &[DVec2]) -> Option<(usize, usize)> {
     let n = poly.len();
-    if n >= 3 && (0..n).all(|i| guess(poly[i], poly[(i + 1) % n], q) != Orientation::Cw) {
-        return None;
+    if n >= 3 {
+        // Inside or on: no edge has q strictly on its outer (right) side.
+        let mut prev = poly[n - 1];
+        let mut outside = false;
+        for &v in poly {
+            if guess(prev, v, q) == Orientation::Cw {
+                outside = true;
+                break;
+            }
+            prev = v;
+        }
+        if !outside {
+            return None;
+        }
     }
     if n == 2 && guess(poly[0], poly[1], q) == Orientation::Collinear {
         return tangent_vertices(q, poly);
     }
-    let closer =
-        |i: usize, j: usize| (poly[i] - q).length_squared() < (poly[j] - q).length_squared();
+    let Some(&first) = poly.first() else {
+        return Some((0, 0));
+    };
+    let d0 = first - q;
     let (mut l, mut r) = (0, 0);
-    for i in 1..n {
-        match guess(q, poly[l], poly[i]) {
-            Orientation::Cw => l = i,
-            Orientation::Collinear if closer(i, l) => l = i,
+    let (mut dl, mut dr) = (d0, d0);
+    for (i, &v) in poly.iter().enumerate().skip(1) {
+        let di = v - q;
+        match sign(dl.perp_dot(di)) {
+            Orientation::Cw => (l, dl) = (i, di),
+            Orientation::Collinear if di.length_squared() < dl.length_squared() => {
+                (l, dl) = (i, di)
+            }
             _ => {}
         }
-        match guess(q, poly[r], poly[i]) {
-            Orientation::Ccw => r = i,
-            Orientation::Collinear if closer(i, r) => r = i,
+        match sign(dr.perp_dot(di)) {
+            Orientation::Ccw => (r, dr) = (i, di),
+            Orientation::Collinear if di.length_squared() < dr.length_squared() => {
+                (r, dr) = (i, di)
+            }
             _ => {}
         }
     }
