@@ -1194,22 +1194,36 @@ impl<'a> Verifier<'a> {
     ) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
-        let all = |f: &dyn Fn(DVec2) -> bool| pts.iter().all(|&p| f(p));
+        // (Each test below is spelled out over `pts`, not passed as a `dyn Fn`: they run for
+        // every pair of arcs the search weighs, and inline this way.)
         let mut sep_of = |poly: usize| -> Option<SepLine> {
             *seps[poly].get_or_insert_with(|| separating_line(near[poly], self.cell, pts))
         };
-        let starts = |k: &Link| all(&|p| self.cell.iter().all(|&c| guess(p, k.l, c) != Cw));
-        let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| guess(p, c, k.r) != Cw));
-        let overlaps =
-            |a: &Link, b: &Link| all(&|p| guess(p, b.l, a.r) != Cw && guess(p, a.r, b.r) != Cw);
+        let starts = |k: &Link| {
+            pts.iter()
+                .all(|&p| self.cell.iter().all(|&c| guess(p, k.l, c) != Cw))
+        };
+        let ends = |k: &Link| {
+            pts.iter()
+                .all(|&p| self.cell.iter().all(|&c| guess(p, c, k.r) != Cw))
+        };
+        let overlaps = |a: &Link, b: &Link| {
+            pts.iter()
+                .all(|&p| guess(p, b.l, a.r) != Cw && guess(p, a.r, b.r) != Cw)
+        };
         // Blockers that share a point `v` (a common vertex, or a vertex of one inside the
         // other) join through it: the chords `[a.l, v]` and `[v, b.r]` lie in their blockers
         // (convexity), are valid by (A), and make (O) hold trivially. Adjacent convex pieces of one footprint, and
         // buildings that share a wall, meet like this; across the line of a shared edge the
         // extreme vertices swap, and only such a join certifies both sides at once.
-        let shared = |a: &Link, b: &Link| -> Option<DVec2> {
+        // Blockers whose boxes are apart share no point: a cheap test, kept apart so that it
+        // inlines where most pairs end.
+        let boxes_meet = |a: &Link, b: &Link| {
             let ((al, ah), (bl, bh)) = (boxes[a.poly], boxes[b.poly]);
-            if al.x > bh.x || bl.x > ah.x || al.y > bh.y || bl.y > ah.y {
+            !(al.x > bh.x || bl.x > ah.x || al.y > bh.y || bl.y > ah.y)
+        };
+        let shared = |a: &Link, b: &Link| -> Option<DVec2> {
+            if !boxes_meet(a, b) {
                 return None;
             }
             let (pa, pb) = (near[a.poly], near[b.poly]);
@@ -1218,10 +1232,14 @@ impl<'a> Verifier<'a> {
                     && point_in_convex(pb, *v) != Containment::Outside
             };
             pa.iter().chain(pb.iter()).copied().find(|v| {
-                in_both(v) && all(&|p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
+                in_both(v)
+                    && pts
+                        .iter()
+                        .all(|&p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
             })
         };
-        let joins = |a: &Link, b: &Link| overlaps(a, b) || shared(a, b).is_some();
+        let joins =
+            |a: &Link, b: &Link| overlaps(a, b) || (boxes_meet(a, b) && shared(a, b).is_some());
         // Greedy cover, as for intervals on a line: from the start arc reaching furthest
         // counter-clockwise (seen from the anchor), repeatedly the joining arc that reaches
         // furthest, while it advances.
