@@ -1097,24 +1097,8 @@ impl<'a> Verifier<'a> {
             }
         };
         let (ucl, ucr) = (u(cl), u(cr));
-        let mut spans: Vec<(f64, f64)> = Vec::with_capacity(near.len().min(64));
-        // Whether the spans, swept in order of their starts, reach from `ucl` to `ucr`. Spans
-        // with equal starts may come in any order (the sweep's answer is the same), so an
-        // unstable sort, which needs no scratch buffer, does.
-        let covered = |spans: &mut Vec<(f64, f64)>| {
-            spans.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-            let mut reach = ucl;
-            for &(a, b) in spans.iter() {
-                if a > reach {
-                    return false;
-                }
-                reach = reach.max(b);
-                if reach >= ucr {
-                    return true;
-                }
-            }
-            reach >= ucr
-        };
+        // Whether the spans read so far cover the cell's angle ([`Sweep`]).
+        let mut sweep = Sweep::new(ucl, ucr);
         let mut seps: Vec<Option<Option<SepLine>>> = vec![None; near.len()];
         let mut arcs: Vec<Link> = Vec::with_capacity(2 * near.len().min(64));
         let mut next = 8usize;
@@ -1123,7 +1107,7 @@ impl<'a> Verifier<'a> {
                 // Only arcs that meet the cell's angle from q can be links (a cheap filter
                 // before the separating line; the conditions decide).
                 if guess(q, cl, b[r]) != Cw && guess(q, b[l], cr) != Cw {
-                    spans.push((u(b[l]).max(ucl), u(b[r]).min(ucr)));
+                    sweep.add(u(b[l]).max(ucl), u(b[r]).min(ucr));
                     // Chords from the extreme vertices seen from each test point: near an
                     // umbra boundary, nearly collinear vertices trade places within
                     // millimetres.
@@ -1171,7 +1155,7 @@ impl<'a> Verifier<'a> {
             let last = poly + 1 == near.len();
             if poly + 1 >= next || last {
                 next *= 2;
-                if (last || covered(&mut spans)) && !arcs.is_empty() {
+                if (last || sweep.covers()) && !arcs.is_empty() {
                     if let Some(path) = self.cover(near, boxes, pts, &mut arcs, &mut seps) {
                         return Some(path);
                     }
@@ -1338,6 +1322,78 @@ impl<'a> Verifier<'a> {
             }
         }
         Some(path)
+    }
+}
+
+/// The sweep of the chain search's angular spans (floating point, to decide when enough
+/// blockers have been read): the spans sorted by their starts and swept from `from`, each span
+/// that starts at or before the reach so far extending it, the answer true as soon as the reach
+/// is at least `to` and false at the first gap. When `from < to` that is whether the least point
+/// from `from` on that no span starting at or before it passes is at least `to`, whatever order
+/// the spans come in, so it is kept up to date as spans are read, with no sort: `reach`, and
+/// the spans that start beyond it, taken in when the reach passes their start. (When
+/// `from >= to`, the sorted sweep answers at its first span: true when there is none or when
+/// one starts at or before `from`.)
+struct Sweep {
+    from: f64,
+    to: f64,
+    reach: f64,
+    /// Some span read so far starts at or before `from`.
+    at_from: bool,
+    /// No span read so far.
+    empty: bool,
+    beyond: Vec<(f64, f64)>,
+}
+
+impl Sweep {
+    fn new(from: f64, to: f64) -> Self {
+        Sweep {
+            from,
+            to,
+            reach: from,
+            at_from: false,
+            empty: true,
+            beyond: Vec::new(),
+        }
+    }
+
+    /// Whether the spans read so far cover `[from, to]` (the sorted sweep's answer).
+    fn covers(&self) -> bool {
+        if self.from < self.to {
+            self.reach >= self.to
+        } else {
+            self.empty || self.at_from
+        }
+    }
+
+    /// Adds the span `[a, b]`.
+    fn add(&mut self, a: f64, b: f64) {
+        self.empty = false;
+        self.at_from |= !(a > self.from);
+        if a > self.reach {
+            self.beyond.push((a, b));
+            return;
+        }
+        if !(b > self.reach) {
+            return;
+        }
+        self.reach = b;
+        loop {
+            let before = self.reach;
+            let reach = &mut self.reach;
+            self.beyond.retain(|&(a, b)| {
+                if a > *reach {
+                    return true;
+                }
+                if b > *reach {
+                    *reach = b;
+                }
+                false
+            });
+            if !(self.reach > before) {
+                break;
+            }
+        }
     }
 }
 
@@ -1526,4 +1582,53 @@ fn bbox(p: &[DVec2]) -> (DVec2, DVec2) {
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
         |(lo, hi), &v| (lo.min(v), hi.max(v)),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sweep as first written: sort the spans by start, sweep from `from`.
+    fn sorted_reaches(spans: &[(f64, f64)], from: f64, to: f64) -> bool {
+        let mut s = spans.to_vec();
+        s.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut reach = from;
+        for &(a, b) in &s {
+            if a > reach {
+                return false;
+            }
+            reach = reach.max(b);
+            if reach >= to {
+                return true;
+            }
+        }
+        reach >= to
+    }
+
+    #[test]
+    fn the_incremental_span_sweep_answers_as_the_sorted_one() {
+        let mut seed = 11u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) % 64) as f64 / 16.0 - 1.0
+        };
+        for _ in 0..20000 {
+            let (from, to) = (next(), next());
+            let n = (next() * 8.0 + 8.0) as usize;
+            // Some spans empty or reversed, many sharing ends (coarse values).
+            let spans: Vec<(f64, f64)> = (0..n).map(|_| (next(), next())).collect();
+            let mut sweep = Sweep::new(from, to);
+            assert_eq!(sweep.covers(), sorted_reaches(&[], from, to));
+            for (k, &(a, b)) in spans.iter().enumerate() {
+                sweep.add(a, b);
+                assert_eq!(
+                    sweep.covers(),
+                    sorted_reaches(&spans[..=k], from, to),
+                    "{spans:?} from {from} to {to}, after {k}"
+                );
+            }
+        }
+    }
 }
