@@ -73,10 +73,13 @@ pub struct HiddenMap {
 
 impl HiddenMap {
     /// Marks visible the pixel at raster position `q` (in pixels), if inside.
+    ///
+    /// (Positions are truncated to `u32`, which saturates beyond the raster just as `usize`
+    /// would: the same pixels, for a cheaper conversion in the map's innermost loops.)
     #[inline]
     fn mark(&mut self, q: DVec2) {
         if q.x >= 0.0 && q.y >= 0.0 {
-            let (ix, iy) = (q.x as usize, q.y as usize);
+            let (ix, iy) = (q.x as u32 as usize, q.y as u32 as usize);
             if ix < self.n && iy < self.n {
                 let k = iy * self.n + ix;
                 self.visible[k >> 6] |= 1 << (k & 63);
@@ -100,7 +103,8 @@ impl HiddenMap {
         if !(q.x >= 0.0 && q.y >= 0.0) {
             return false;
         }
-        let (ix, iy) = (q.x as usize, q.y as usize);
+        // (As in `mark`: `u32` saturates outside the raster like `usize`.)
+        let (ix, iy) = (q.x as u32 as usize, q.y as u32 as usize);
         if ix >= self.n || iy >= self.n {
             return false;
         }
