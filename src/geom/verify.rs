@@ -384,6 +384,9 @@ pub struct Verifier<'a> {
     min_step_m: f64,
     /// Scratch of [`Self::near`]: a stamp per blocker of the index, and the last stamp used.
     seen: std::cell::RefCell<(Vec<u32>, u32)>,
+    /// Scratch buffers of [`Self::chain`], kept between its calls (hundreds of thousands per
+    /// cell) so that they are not allocated each time; each call clears what it uses.
+    scratch: std::cell::RefCell<ChainScratch>,
 }
 
 /// A cheap hasher for the certificate cache's bucket keys (pairs of small integers from the
@@ -581,6 +584,7 @@ impl<'a> Verifier<'a> {
             max_step_m: MAX_STEP_M,
             min_step_m: MIN_PIECE_M,
             seen: Default::default(),
+            scratch: Default::default(),
         }
     }
 
@@ -1098,9 +1102,17 @@ impl<'a> Verifier<'a> {
         };
         let (ucl, ucr) = (u(cl), u(cr));
         // Whether the spans read so far cover the cell's angle ([`Sweep`]).
-        let mut sweep = Sweep::new(ucl, ucr);
-        let mut seps: Vec<Option<Option<SepLine>>> = vec![None; near.len()];
-        let mut arcs: Vec<Link> = Vec::with_capacity(2 * near.len().min(64));
+        let mut scratch = self.scratch.borrow_mut();
+        let ChainScratch {
+            seps,
+            arcs,
+            usable,
+            beyond,
+        } = &mut *scratch;
+        let mut sweep = Sweep::new(ucl, ucr, beyond);
+        seps.clear();
+        seps.resize(near.len(), None);
+        arcs.clear();
         let mut next = 8usize;
         for (poly, b) in near.iter().enumerate() {
             if let Some((l, r)) = guess_tangents(q, b) {
@@ -1156,7 +1168,7 @@ impl<'a> Verifier<'a> {
             if poly + 1 >= next || last {
                 next *= 2;
                 if (last || sweep.covers()) && !arcs.is_empty() {
-                    if let Some(path) = self.cover(near, boxes, pts, &mut arcs, &mut seps) {
+                    if let Some(path) = self.cover(near, boxes, pts, arcs, seps, usable) {
                         return Some(path);
                     }
                 }
@@ -1175,6 +1187,7 @@ impl<'a> Verifier<'a> {
         pts: &[DVec2; 3],
         arcs: &mut [Link],
         seps: &mut [Option<Option<SepLine>>],
+        usable: &mut Vec<bool>,
     ) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
@@ -1228,7 +1241,8 @@ impl<'a> Verifier<'a> {
         // counter-clockwise (seen from the anchor), repeatedly the joining arc that reaches
         // furthest, while it advances.
         let further = |x: &Link, y: &Link| guess(q, y.r, x.r) == Ccw;
-        let mut usable = vec![true; arcs.len()];
+        usable.clear();
+        usable.resize(arcs.len(), true);
         let mut path: Vec<Link> = Vec::with_capacity(8);
         let greedy = loop {
             let prev = path.last().copied();
@@ -1325,6 +1339,16 @@ impl<'a> Verifier<'a> {
     }
 }
 
+/// The buffers [`Verifier::chain`] reuses between calls: the separating lines found per blocker,
+/// the arcs read, the cover's usable flags and the sweep's spans beyond its reach.
+#[derive(Default)]
+struct ChainScratch {
+    seps: Vec<Option<Option<SepLine>>>,
+    arcs: Vec<Link>,
+    usable: Vec<bool>,
+    beyond: Vec<(f64, f64)>,
+}
+
 /// The sweep of the chain search's angular spans (floating point, to decide when enough
 /// blockers have been read): the spans sorted by their starts and swept from `from`, each span
 /// that starts at or before the reach so far extending it, the answer true as soon as the reach
@@ -1334,7 +1358,7 @@ impl<'a> Verifier<'a> {
 /// the spans that start beyond it, taken in when the reach passes their start. (When
 /// `from >= to`, the sorted sweep answers at its first span: true when there is none or when
 /// one starts at or before `from`.)
-struct Sweep {
+struct Sweep<'s> {
     from: f64,
     to: f64,
     reach: f64,
@@ -1342,18 +1366,20 @@ struct Sweep {
     at_from: bool,
     /// No span read so far.
     empty: bool,
-    beyond: Vec<(f64, f64)>,
+    beyond: &'s mut Vec<(f64, f64)>,
 }
 
-impl Sweep {
-    fn new(from: f64, to: f64) -> Self {
+impl<'s> Sweep<'s> {
+    /// The sweep from `from` to `to`, with `beyond` as its buffer (cleared).
+    fn new(from: f64, to: f64, beyond: &'s mut Vec<(f64, f64)>) -> Self {
+        beyond.clear();
         Sweep {
             from,
             to,
             reach: from,
             at_from: false,
             empty: true,
-            beyond: Vec::new(),
+            beyond,
         }
     }
 
@@ -1619,7 +1645,8 @@ mod tests {
             let n = (next() * 8.0 + 8.0) as usize;
             // Some spans empty or reversed, many sharing ends (coarse values).
             let spans: Vec<(f64, f64)> = (0..n).map(|_| (next(), next())).collect();
-            let mut sweep = Sweep::new(from, to);
+            let mut buffer = vec![(9.0, 9.0)];
+            let mut sweep = Sweep::new(from, to, &mut buffer);
             assert_eq!(sweep.covers(), sorted_reaches(&[], from, to));
             for (k, &(a, b)) in spans.iter().enumerate() {
                 sweep.add(a, b);
