@@ -73,10 +73,13 @@ pub struct HiddenMap {
 
 impl HiddenMap {
     /// Marks visible the pixel at raster position `q` (in pixels), if inside.
+    ///
+    /// (Positions are truncated to `u32`, which saturates beyond the raster just as `usize`
+    /// would: the same pixels, for a cheaper conversion in the map's innermost loops.)
     #[inline]
     fn mark(&mut self, q: DVec2) {
         if q.x >= 0.0 && q.y >= 0.0 {
-            let (ix, iy) = (q.x as usize, q.y as usize);
+            let (ix, iy) = (q.x as u32 as usize, q.y as u32 as usize);
             if ix < self.n && iy < self.n {
                 let k = iy * self.n + ix;
                 self.visible[k >> 6] |= 1 << (k & 63);
@@ -100,7 +103,8 @@ impl HiddenMap {
         if !(q.x >= 0.0 && q.y >= 0.0) {
             return false;
         }
-        let (ix, iy) = (q.x as usize, q.y as usize);
+        // (As in `mark`: `u32` saturates outside the raster like `usize`.)
+        let (ix, iy) = (q.x as u32 as usize, q.y as u32 as usize);
         if ix >= self.n || iy >= self.n {
             return false;
         }
@@ -329,7 +333,7 @@ impl Groups {
             .enumerate()
             .map(|(i, e)| (key(e.0), i as u32))
             .collect();
-        keyed.sort_unstable();
+        sort_keyed(&mut keyed);
         let mut groups: Vec<Group> = Vec::new();
         let mut ids: Vec<u32> = Vec::with_capacity(keyed.len());
         let mut i = 0;
@@ -356,6 +360,44 @@ impl Groups {
         });
         Groups { groups, ids }
     }
+}
+
+/// Sorts `keyed` ascending, as `sort_unstable` would (the ids are distinct, so the order is
+/// total and any sort gives the same result). The keys of one map span a few thousand grid
+/// squares around the cell, so a counting sort over them (ids placed in ascending order within
+/// a square) replaces a comparison sort of tens of thousands of edges per slice; a wider span
+/// falls back to the comparison sort.
+fn sort_keyed(keyed: &mut Vec<((i64, i64), u32)>) {
+    let ids_ascending = keyed.windows(2).all(|w| w[0].1 < w[1].1);
+    let Some(((x0, y0), (x1, y1))) = keyed.iter().fold(None, |r, &((x, y), _)| {
+        Some(match r {
+            None => ((x, y), (x, y)),
+            Some(((a, b), (c, d))) => ((x.min(a), y.min(b)), (x.max(c), y.max(d))),
+        })
+    }) else {
+        return;
+    };
+    let (nx, ny) = (x1.abs_diff(x0) + 1, y1.abs_diff(y0) + 1);
+    if !ids_ascending || nx.saturating_mul(ny) > 4 * keyed.len() as u64 + 1024 {
+        keyed.sort_unstable();
+        return;
+    }
+    // Squares in (x, y) order: the key's own lexicographic order.
+    let slot = |(x, y): (i64, i64)| (x.abs_diff(x0) * ny + y.abs_diff(y0)) as usize;
+    let mut start = vec![0u32; (nx * ny) as usize + 1];
+    for &(k, _) in keyed.iter() {
+        start[slot(k) + 1] += 1;
+    }
+    for s in 1..start.len() {
+        start[s] += start[s - 1];
+    }
+    let mut out = vec![((0i64, 0i64), 0u32); keyed.len()];
+    for &(k, i) in keyed.iter() {
+        let s = &mut start[slot(k)];
+        out[*s as usize] = (k, i);
+        *s += 1;
+    }
+    *keyed = out;
 }
 
 /// Least distance from `p` to the segment `[a, b]`.
@@ -467,6 +509,27 @@ mod tests {
             DVec2::new(x0 + s, y0 + s),
             DVec2::new(x0, y0 + s),
         ]
+    }
+
+    #[test]
+    fn the_counting_sort_of_edge_keys_is_the_comparison_sort() {
+        // Narrow spans (counting sort), negative keys, repeated keys, and a wide span (fallback).
+        let mut seed = 7u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as i64
+        };
+        for (n, span) in [(0, 1), (1, 1), (50, 3), (2000, 40), (300, 1 << 40)] {
+            let mut keyed: Vec<((i64, i64), u32)> = (0..n)
+                .map(|i| ((next() % span - span / 2, next() % span), i as u32))
+                .collect();
+            let mut want = keyed.clone();
+            want.sort_unstable();
+            sort_keyed(&mut keyed);
+            assert_eq!(keyed, want, "n {n}, span {span}");
+        }
     }
 
     #[test]

@@ -384,6 +384,9 @@ pub struct Verifier<'a> {
     min_step_m: f64,
     /// Scratch of [`Self::near`]: a stamp per blocker of the index, and the last stamp used.
     seen: std::cell::RefCell<(Vec<u32>, u32)>,
+    /// Scratch buffers of [`Self::chain`], kept between its calls (hundreds of thousands per
+    /// cell) so that they are not allocated each time; each call clears what it uses.
+    scratch: std::cell::RefCell<ChainScratch>,
 }
 
 /// A cheap hasher for the certificate cache's bucket keys (pairs of small integers from the
@@ -581,6 +584,7 @@ impl<'a> Verifier<'a> {
             max_step_m: MAX_STEP_M,
             min_step_m: MIN_PIECE_M,
             seen: Default::default(),
+            scratch: Default::default(),
         }
     }
 
@@ -1097,30 +1101,25 @@ impl<'a> Verifier<'a> {
             }
         };
         let (ucl, ucr) = (u(cl), u(cr));
-        let mut spans: Vec<(f64, f64)> = Vec::with_capacity(near.len().min(64));
-        let covered = |spans: &mut Vec<(f64, f64)>| {
-            spans.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let mut reach = ucl;
-            for &(a, b) in spans.iter() {
-                if a > reach {
-                    return false;
-                }
-                reach = reach.max(b);
-                if reach >= ucr {
-                    return true;
-                }
-            }
-            reach >= ucr
-        };
-        let mut seps: Vec<Option<Option<SepLine>>> = vec![None; near.len()];
-        let mut arcs: Vec<Link> = Vec::with_capacity(2 * near.len().min(64));
+        // Whether the spans read so far cover the cell's angle ([`Sweep`]).
+        let mut scratch = self.scratch.borrow_mut();
+        let ChainScratch {
+            seps,
+            arcs,
+            usable,
+            beyond,
+        } = &mut *scratch;
+        let mut sweep = Sweep::new(ucl, ucr, beyond);
+        seps.clear();
+        seps.resize(near.len(), None);
+        arcs.clear();
         let mut next = 8usize;
         for (poly, b) in near.iter().enumerate() {
             if let Some((l, r)) = guess_tangents(q, b) {
                 // Only arcs that meet the cell's angle from q can be links (a cheap filter
                 // before the separating line; the conditions decide).
                 if guess(q, cl, b[r]) != Cw && guess(q, b[l], cr) != Cw {
-                    spans.push((u(b[l]).max(ucl), u(b[r]).min(ucr)));
+                    sweep.add(u(b[l]).max(ucl), u(b[r]).min(ucr));
                     // Chords from the extreme vertices seen from each test point: near an
                     // umbra boundary, nearly collinear vertices trade places within
                     // millimetres.
@@ -1168,8 +1167,8 @@ impl<'a> Verifier<'a> {
             let last = poly + 1 == near.len();
             if poly + 1 >= next || last {
                 next *= 2;
-                if (last || covered(&mut spans)) && !arcs.is_empty() {
-                    if let Some(path) = self.cover(near, boxes, pts, &mut arcs, &mut seps) {
+                if (last || sweep.covers()) && !arcs.is_empty() {
+                    if let Some(path) = self.cover(near, boxes, pts, arcs, seps, usable) {
                         return Some(path);
                     }
                 }
@@ -1188,25 +1187,40 @@ impl<'a> Verifier<'a> {
         pts: &[DVec2; 3],
         arcs: &mut [Link],
         seps: &mut [Option<Option<SepLine>>],
+        usable: &mut Vec<bool>,
     ) -> Option<Vec<Link>> {
         use Orientation::*;
         let q = pts[0];
-        let all = |f: &dyn Fn(DVec2) -> bool| pts.iter().all(|&p| f(p));
+        // (Each test below is spelled out over `pts`, not passed as a `dyn Fn`: they run for
+        // every pair of arcs the search weighs, and inline this way.)
         let mut sep_of = |poly: usize| -> Option<SepLine> {
             *seps[poly].get_or_insert_with(|| separating_line(near[poly], self.cell, pts))
         };
-        let starts = |k: &Link| all(&|p| self.cell.iter().all(|&c| guess(p, k.l, c) != Cw));
-        let ends = |k: &Link| all(&|p| self.cell.iter().all(|&c| guess(p, c, k.r) != Cw));
-        let overlaps =
-            |a: &Link, b: &Link| all(&|p| guess(p, b.l, a.r) != Cw && guess(p, a.r, b.r) != Cw);
+        let starts = |k: &Link| {
+            pts.iter()
+                .all(|&p| self.cell.iter().all(|&c| guess(p, k.l, c) != Cw))
+        };
+        let ends = |k: &Link| {
+            pts.iter()
+                .all(|&p| self.cell.iter().all(|&c| guess(p, c, k.r) != Cw))
+        };
+        let overlaps = |a: &Link, b: &Link| {
+            pts.iter()
+                .all(|&p| guess(p, b.l, a.r) != Cw && guess(p, a.r, b.r) != Cw)
+        };
         // Blockers that share a point `v` (a common vertex, or a vertex of one inside the
         // other) join through it: the chords `[a.l, v]` and `[v, b.r]` lie in their blockers
         // (convexity), are valid by (A), and make (O) hold trivially. Adjacent convex pieces of one footprint, and
         // buildings that share a wall, meet like this; across the line of a shared edge the
         // extreme vertices swap, and only such a join certifies both sides at once.
-        let shared = |a: &Link, b: &Link| -> Option<DVec2> {
+        // Blockers whose boxes are apart share no point: a cheap test, kept apart so that it
+        // inlines where most pairs end.
+        let boxes_meet = |a: &Link, b: &Link| {
             let ((al, ah), (bl, bh)) = (boxes[a.poly], boxes[b.poly]);
-            if al.x > bh.x || bl.x > ah.x || al.y > bh.y || bl.y > ah.y {
+            !(al.x > bh.x || bl.x > ah.x || al.y > bh.y || bl.y > ah.y)
+        };
+        let shared = |a: &Link, b: &Link| -> Option<DVec2> {
+            if !boxes_meet(a, b) {
                 return None;
             }
             let (pa, pb) = (near[a.poly], near[b.poly]);
@@ -1215,15 +1229,20 @@ impl<'a> Verifier<'a> {
                     && point_in_convex(pb, *v) != Containment::Outside
             };
             pa.iter().chain(pb.iter()).copied().find(|v| {
-                in_both(v) && all(&|p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
+                in_both(v)
+                    && pts
+                        .iter()
+                        .all(|&p| orient(p, a.l, *v) == Ccw && orient(p, *v, b.r) == Ccw)
             })
         };
-        let joins = |a: &Link, b: &Link| overlaps(a, b) || shared(a, b).is_some();
+        let joins =
+            |a: &Link, b: &Link| overlaps(a, b) || (boxes_meet(a, b) && shared(a, b).is_some());
         // Greedy cover, as for intervals on a line: from the start arc reaching furthest
         // counter-clockwise (seen from the anchor), repeatedly the joining arc that reaches
         // furthest, while it advances.
         let further = |x: &Link, y: &Link| guess(q, y.r, x.r) == Ccw;
-        let mut usable = vec![true; arcs.len()];
+        usable.clear();
+        usable.resize(arcs.len(), true);
         let mut path: Vec<Link> = Vec::with_capacity(8);
         let greedy = loop {
             let prev = path.last().copied();
@@ -1320,6 +1339,90 @@ impl<'a> Verifier<'a> {
     }
 }
 
+/// The buffers [`Verifier::chain`] reuses between calls: the separating lines found per blocker,
+/// the arcs read, the cover's usable flags and the sweep's spans beyond its reach.
+#[derive(Default)]
+struct ChainScratch {
+    seps: Vec<Option<Option<SepLine>>>,
+    arcs: Vec<Link>,
+    usable: Vec<bool>,
+    beyond: Vec<(f64, f64)>,
+}
+
+/// The sweep of the chain search's angular spans (floating point, to decide when enough
+/// blockers have been read): the spans sorted by their starts and swept from `from`, each span
+/// that starts at or before the reach so far extending it, the answer true as soon as the reach
+/// is at least `to` and false at the first gap. When `from < to` that is whether the least point
+/// from `from` on that no span starting at or before it passes is at least `to`, whatever order
+/// the spans come in, so it is kept up to date as spans are read, with no sort: `reach`, and
+/// the spans that start beyond it, taken in when the reach passes their start. (When
+/// `from >= to`, the sorted sweep answers at its first span: true when there is none or when
+/// one starts at or before `from`.)
+struct Sweep<'s> {
+    from: f64,
+    to: f64,
+    reach: f64,
+    /// Some span read so far starts at or before `from`.
+    at_from: bool,
+    /// No span read so far.
+    empty: bool,
+    beyond: &'s mut Vec<(f64, f64)>,
+}
+
+impl<'s> Sweep<'s> {
+    /// The sweep from `from` to `to`, with `beyond` as its buffer (cleared).
+    fn new(from: f64, to: f64, beyond: &'s mut Vec<(f64, f64)>) -> Self {
+        beyond.clear();
+        Sweep {
+            from,
+            to,
+            reach: from,
+            at_from: false,
+            empty: true,
+            beyond,
+        }
+    }
+
+    /// Whether the spans read so far cover `[from, to]` (the sorted sweep's answer).
+    fn covers(&self) -> bool {
+        if self.from < self.to {
+            self.reach >= self.to
+        } else {
+            self.empty || self.at_from
+        }
+    }
+
+    /// Adds the span `[a, b]`.
+    fn add(&mut self, a: f64, b: f64) {
+        self.empty = false;
+        self.at_from |= !(a > self.from);
+        if a > self.reach {
+            self.beyond.push((a, b));
+            return;
+        }
+        if !(b > self.reach) {
+            return;
+        }
+        self.reach = b;
+        loop {
+            let before = self.reach;
+            let reach = &mut self.reach;
+            self.beyond.retain(|&(a, b)| {
+                if a > *reach {
+                    return true;
+                }
+                if b > *reach {
+                    *reach = b;
+                }
+                false
+            });
+            if !(self.reach > before) {
+                break;
+            }
+        }
+    }
+}
+
 /// A line through two input vertices with the blocker `b` on one closed side and the cell on the
 /// other, having every point of `qs` strictly on `b`'s side. Candidates: the cell's edges, the
 /// blocker's edges and the two crossing common tangents.
@@ -1368,7 +1471,12 @@ fn separating_line(b: &[DVec2], cell: &[DVec2], qs: &[DVec2]) -> Option<SepLine>
 /// checked with the exact [`orient`], so a wrong guess can only lose a certificate.
 #[inline]
 fn guess(a: DVec2, b: DVec2, c: DVec2) -> Orientation {
-    let d = (b - a).perp_dot(c - a);
+    sign((b - a).perp_dot(c - a))
+}
+
+/// The orientation a floating-point determinant `d` stands for (NaN: collinear).
+#[inline]
+fn sign(d: f64) -> Orientation {
     if d > 0.0 {
         Orientation::Ccw
     } else if d < 0.0 {
@@ -1380,26 +1488,50 @@ fn guess(a: DVec2, b: DVec2, c: DVec2) -> Orientation {
 
 /// [`tangent_vertices`] with [`guess`]: the extreme vertices of `poly` seen from `q`, or `None`
 /// when `q` seems to be inside or on it.
+///
+/// This runs for every blocker the search reads, so it computes each `poly[i] - q` once:
+/// `guess(q, poly[l], poly[i])` is `(poly[l] - q).perp_dot(poly[i] - q)`, the same operations
+/// on the same values, so the same bits and the same answers.
 fn guess_tangents(q: DVec2, poly: &[DVec2]) -> Option<(usize, usize)> {
     let n = poly.len();
-    if n >= 3 && (0..n).all(|i| guess(poly[i], poly[(i + 1) % n], q) != Orientation::Cw) {
-        return None;
+    if n >= 3 {
+        // Inside or on: no edge has q strictly on its outer (right) side.
+        let mut prev = poly[n - 1];
+        let mut outside = false;
+        for &v in poly {
+            if guess(prev, v, q) == Orientation::Cw {
+                outside = true;
+                break;
+            }
+            prev = v;
+        }
+        if !outside {
+            return None;
+        }
     }
     if n == 2 && guess(poly[0], poly[1], q) == Orientation::Collinear {
         return tangent_vertices(q, poly);
     }
-    let closer =
-        |i: usize, j: usize| (poly[i] - q).length_squared() < (poly[j] - q).length_squared();
+    let Some(&first) = poly.first() else {
+        return Some((0, 0));
+    };
+    let d0 = first - q;
     let (mut l, mut r) = (0, 0);
-    for i in 1..n {
-        match guess(q, poly[l], poly[i]) {
-            Orientation::Cw => l = i,
-            Orientation::Collinear if closer(i, l) => l = i,
+    let (mut dl, mut dr) = (d0, d0);
+    for (i, &v) in poly.iter().enumerate().skip(1) {
+        let di = v - q;
+        match sign(dl.perp_dot(di)) {
+            Orientation::Cw => (l, dl) = (i, di),
+            Orientation::Collinear if di.length_squared() < dl.length_squared() => {
+                (l, dl) = (i, di)
+            }
             _ => {}
         }
-        match guess(q, poly[r], poly[i]) {
-            Orientation::Ccw => r = i,
-            Orientation::Collinear if closer(i, r) => r = i,
+        match sign(dr.perp_dot(di)) {
+            Orientation::Ccw => (r, dr) = (i, di),
+            Orientation::Collinear if di.length_squared() < dr.length_squared() => {
+                (r, dr) = (i, di)
+            }
             _ => {}
         }
     }
@@ -1476,4 +1608,54 @@ fn bbox(p: &[DVec2]) -> (DVec2, DVec2) {
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
         |(lo, hi), &v| (lo.min(v), hi.max(v)),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sweep as first written: sort the spans by start, sweep from `from`.
+    fn sorted_reaches(spans: &[(f64, f64)], from: f64, to: f64) -> bool {
+        let mut s = spans.to_vec();
+        s.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut reach = from;
+        for &(a, b) in &s {
+            if a > reach {
+                return false;
+            }
+            reach = reach.max(b);
+            if reach >= to {
+                return true;
+            }
+        }
+        reach >= to
+    }
+
+    #[test]
+    fn the_incremental_span_sweep_answers_as_the_sorted_one() {
+        let mut seed = 11u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) % 64) as f64 / 16.0 - 1.0
+        };
+        for _ in 0..20000 {
+            let (from, to) = (next(), next());
+            let n = (next() * 8.0 + 8.0) as usize;
+            // Some spans empty or reversed, many sharing ends (coarse values).
+            let spans: Vec<(f64, f64)> = (0..n).map(|_| (next(), next())).collect();
+            let mut buffer = vec![(9.0, 9.0)];
+            let mut sweep = Sweep::new(from, to, &mut buffer);
+            assert_eq!(sweep.covers(), sorted_reaches(&[], from, to));
+            for (k, &(a, b)) in spans.iter().enumerate() {
+                sweep.add(a, b);
+                assert_eq!(
+                    sweep.covers(),
+                    sorted_reaches(&spans[..=k], from, to),
+                    "{spans:?} from {from} to {to}, after {k}"
+                );
+            }
+        }
+    }
 }
