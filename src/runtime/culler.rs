@@ -329,6 +329,12 @@ impl Bin {
     }
 }
 
+/// The bin of [`binned_split`] that box `b`'s key on `axis` falls in, for keys spanning
+/// `lo..=hi` (`lo < hi`).
+fn bin_of(b: &[f64; 6], axis: usize, lo: f64, hi: f64) -> usize {
+    (((centre(b, axis) - lo) * (SPLIT_BINS as f64 / (hi - lo))) as usize).min(SPLIT_BINS - 1)
+}
+
 /// Splits `part` (more than [`LEAF_SIZE`] boxes, keys within `cmin..=cmax` per axis) in two by
 /// the cost of [`Bin::cost`]: over [`SPLIT_BINS`] bins of the keys along each axis, the
 /// boundary between bins with the least summed cost of the two sides, each side holding at
@@ -344,12 +350,10 @@ fn binned_split(part: &mut [(u32, [f64; 6])], cmin: &[f64; 3], cmax: &[f64; 3]) 
     let least = ((MIN_SIDE * n as f64).ceil() as usize).max(1);
     let mut best: Option<(f64, usize, usize)> = None;
     for axis in 0..3 {
-        let (lo, hi) = (cmin[axis], cmax[axis]);
-        if !(hi > lo) {
+        if !(cmax[axis] > cmin[axis]) {
             continue;
         }
-        let scale = SPLIT_BINS as f64 / (hi - lo);
-        let bin = |b: &[f64; 6]| (((centre(b, axis) - lo) * scale) as usize).min(SPLIT_BINS - 1);
+        let bin = |b: &[f64; 6]| bin_of(b, axis, cmin[axis], cmax[axis]);
         let mut bins = [Bin::EMPTY; SPLIT_BINS];
         for (_, b) in part.iter() {
             bins[bin(b)].add(b);
@@ -375,12 +379,9 @@ fn binned_split(part: &mut [(u32, [f64; 6])], cmin: &[f64; 3], cmax: &[f64; 3]) 
         }
     }
     let (_, axis, last) = best?;
-    let (lo, hi) = (cmin[axis], cmax[axis]);
-    let scale = SPLIT_BINS as f64 / (hi - lo);
-    let bin = |b: &[f64; 6]| (((centre(b, axis) - lo) * scale) as usize).min(SPLIT_BINS - 1);
     let mut k = 0;
     for j in 0..n {
-        if bin(&part[j].1) <= last {
+        if bin_of(&part[j].1, axis, cmin[axis], cmax[axis]) <= last {
             part.swap(j, k);
             k += 1;
         }
