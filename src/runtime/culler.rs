@@ -15,7 +15,11 @@
 //!   no box inside can be hidden by it). Property tests check the result against the box-by-box
 //!   rule. The VOs are tried in any order (the one that last hid something first), which
 //!   changes how many are tried, not the answer; a box is tested for `Hidden` alone
-//!   ([`PreparedVo::hides_probe`], the same arithmetic as `cover`). Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that
+//!   ([`PreparedVo::hides_probe`], the same arithmetic as `cover`). Each VO carries down the
+//!   walk the half-planes of its umbra that the bounds above were not found strictly inside;
+//!   the others are not tested again below, with the same answer bit for bit (a footprint's
+//!   least value of a form, rounded as computed, only grows as the footprint shrinks:
+//!   [`PreparedVo::cover_group_planes`]). Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that
 //!   rule 3 grows by 1 mm) could tell the two apart, at a box lying within about 1e-12 m of an
 //!   umbra edge; even then the hierarchy stays sound: a subtree is culled only when its bounds
 //!   are hidden, which, by rule 3's margin, every box inside really is, and dropping a VO can
@@ -32,7 +36,7 @@
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::{Frame, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
-use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe};
+use crate::runtime::occlusion::{Cover, GroupProbe, PreparedVo, Probe, ALL_PLANES};
 
 /// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
 /// leaf kept, for `Hidden` alone, from memory laid out in tree order): on the generated 10^5
@@ -515,50 +519,64 @@ pub struct PvsStats {
     pub visible: usize,
 }
 
+/// The half-planes still to test of VO `i` in `planes` (three bits per VO, see [`test`]).
+#[inline(always)]
+fn planes_of(planes: u32, i: usize) -> u8 {
+    (planes >> (3 * i)) as u8 & ALL_PLANES
+}
+
+/// Every half-plane of every VO still to test: where the walk starts.
+const ALL_VO_PLANES: u32 = (1 << (3 * MAX_VOS_PER_CELL)) - 1;
+const _: () = assert!(3 * MAX_VOS_PER_CELL < 32);
+
 /// `None` when a VO of `mask` (not empty) hides `bx`, else the VOs of `mask` whose umbra `bx`
-/// meets. VO `*last` is tried first, and becomes the VO that hid `bx` (see [`hidden`]).
+/// meets, and for each of them the half-planes of its umbra that `bx` is not strictly inside
+/// (bits `3i..3i + 3` for VO `i`), which are all that the boxes below must test
+/// ([`PreparedVo::cover_group_planes`]); `planes` holds those of the parent. VO `*last` is
+/// tried first, and becomes the VO that hid `bx` (see [`hidden`]).
 #[inline]
 fn test(
     prepared: &[PreparedVo; MAX_VOS_PER_CELL],
     view: &crate::runtime::frame::CellView,
-    mask: u16,
+    (mask, planes): (u16, u32),
     last: &mut usize,
     bx: &[f64; 6],
     min_top: f64,
-) -> Option<u16> {
+) -> Option<(u16, u32)> {
     let g = GroupProbe::new(view, bx, min_top);
     let mut left = mask;
     let mut keep = mask;
+    let mut below = 0;
     let mut i = *last;
     if mask & (1 << i) == 0 {
         i = left.trailing_zeros() as usize;
     }
     loop {
         left &= !(1 << i);
-        match prepared[i].cover_group_probe(view, &g) {
-            Cover::Hidden => {
+        match prepared[i].cover_group_planes(view, &g, planes_of(planes, i)) {
+            (Cover::Hidden, _) => {
                 *last = i;
                 return None;
             }
-            Cover::Outside => keep &= !(1 << i),
-            Cover::Partial => {}
+            (Cover::Outside, _) => keep &= !(1 << i),
+            (Cover::Partial, todo) => below |= u32::from(todo) << (3 * i),
         }
         if left == 0 {
-            return Some(keep);
+            return Some((keep, below));
         }
         i = left.trailing_zeros() as usize;
     }
 }
 
 /// Whether a VO of `mask` (not empty) hides box `bx`: the VO-independent part of rule 3 once
-/// ([`Probe`]), then each VO's test. VO `*last` is tried first, and becomes the VO that hid
+/// ([`Probe`]), then each VO's test, of the half-planes `planes` leaves it ([`test`]). VO `*last` is tried first, and becomes the VO that hid
 /// `bx`: a VO that hid a box tends to hide the next boxes of the depth-first walk too, which
 /// are its neighbours. The order changes no answer, only how many VOs are tried.
 #[inline]
 fn hidden(
     prepared: &[PreparedVo; MAX_VOS_PER_CELL],
     view: &crate::runtime::frame::CellView,
-    mask: u16,
+    (mask, planes): (u16, u32),
     last: &mut usize,
     bx: &[f64; 6],
 ) -> bool {
@@ -570,7 +588,7 @@ fn hidden(
     }
     loop {
         left &= !(1 << i);
-        if prepared[i].hides_probe(view, &probe) {
+        if prepared[i].hides_probe_planes(view, &probe, planes_of(planes, i)) {
             *last = i;
             return true;
         }
@@ -639,31 +657,24 @@ pub fn pvs_with_stats(
     }
 
     let mut last = 0;
-    let mut stack = [(0u32, 0u16); STACK];
+    let mut stack = [(0u32, (0u16, 0u32)); STACK];
     let mut sp = 0;
     if !tree.nodes.is_empty() {
-        stack[0] = (0, full);
+        stack[0] = (0, (full, ALL_VO_PLANES));
         sp = 1;
     }
     while sp > 0 {
         sp -= 1;
-        let (ni, mask) = stack[sp];
+        let (ni, vos) = stack[sp];
         let node = &tree.nodes[ni as usize];
         let range = node.start as usize..node.end as usize;
         st.nodes_tested += 1;
-        let Some(mask) = test(
-            &prepared,
-            &view,
-            mask,
-            &mut last,
-            &node.bounds,
-            node.min_top,
-        ) else {
+        let Some(vos) = test(&prepared, &view, vos, &mut last, &node.bounds, node.min_top) else {
             st.subtrees_culled += 1;
             continue;
         };
         let kids = node.kids();
-        if mask == 0 || sp + kids.len() > STACK {
+        if vos.0 == 0 || sp + kids.len() > STACK {
             st.subtrees_kept += 1;
             for &id in &tree.ids[range] {
                 keep(out, id);
@@ -673,14 +684,14 @@ pub fn pvs_with_stats(
         if kids.is_empty() {
             for k in range {
                 st.boxes_tested += 1;
-                if !hidden(&prepared, &view, mask, &mut last, &tree.boxes[k]) {
+                if !hidden(&prepared, &view, vos, &mut last, &tree.boxes[k]) {
                     keep(out, tree.ids[k]);
                 }
             }
             continue;
         }
         for &k in kids {
-            stack[sp] = (k, mask);
+            stack[sp] = (k, vos);
             sp += 1;
         }
     }

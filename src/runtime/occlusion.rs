@@ -345,6 +345,70 @@ impl PreparedVo {
     }
 }
 
+/// The umbra's three half-planes as bits (bit `k`: the `k`-th linear form), all still to test:
+/// where the culler starts each VO ([`PreparedVo::cover_group_planes`]).
+pub const ALL_PLANES: u8 = 0b111;
+
+impl PreparedVo {
+    /// [`Self::cover_group_probe`] for a group lying inside a group that was found strictly
+    /// inside the half-planes missing from `todo` (bit `k`: the `k`-th form): only those of
+    /// `todo` are tested. Also returned: the half-planes that its own subgroups must still
+    /// test, `todo` less those this group lies strictly inside. The answer is the same as
+    /// testing all three, bit for bit: a form's least value over a footprint, computed as here,
+    /// can only grow when the footprint shrinks (each product, `min` and sum is rounded
+    /// monotonically, and a grown sub-footprint lies inside the grown footprint), so a subgroup
+    /// of a group strictly inside a half-plane is strictly inside it too, and that half-plane
+    /// can make it neither `Outside` nor `Partial`. (The frustum culler's plane masking.)
+    #[inline]
+    pub fn cover_group_planes(&self, view: &CellView, g: &GroupProbe, todo: u8) -> (Cover, u8) {
+        if !self.usable {
+            return (Cover::Outside, 0);
+        }
+        let [x0, y0, x1, y1] = g.probe.fp;
+        let mut left = todo;
+        for (k, f) in self.planes.iter().enumerate() {
+            if todo & (1 << k) == 0 {
+                continue;
+            }
+            let (px0, px1) = (f[0] * x0, f[0] * x1);
+            let (py0, py1) = (f[1] * y0, f[1] * y1);
+            // The same sums, in the same order, as in [`Self::footprint`].
+            if !(max(px0, px1) + max(py0, py1) + f[2] > 0.0) {
+                return (Cover::Outside, 0);
+            }
+            if min(px0, px1) + min(py0, py1) + f[2] > 0.0 {
+                left &= !(1 << k);
+            }
+        }
+        if left == 0 && self.heights_hide(view, &g.probe) {
+            return (Cover::Hidden, 0);
+        }
+        (self.group_partial(view, g), left)
+    }
+
+    /// [`Self::hides_probe`] for a box lying inside a group found strictly inside the
+    /// half-planes missing from `todo` ([`Self::cover_group_planes`]): only those of `todo` are
+    /// tested, with the same answer.
+    #[inline]
+    pub fn hides_probe_planes(&self, view: &CellView, p: &Probe, todo: u8) -> bool {
+        if !self.usable {
+            return false;
+        }
+        let [x0, y0, x1, y1] = p.fp;
+        for (k, f) in self.planes.iter().enumerate() {
+            if todo & (1 << k) == 0 {
+                continue;
+            }
+            let (px0, px1) = (f[0] * x0, f[0] * x1);
+            let (py0, py1) = (f[1] * y0, f[1] * y1);
+            if !(min(px0, px1) + min(py0, py1) + f[2] > 0.0) {
+                return false;
+            }
+        }
+        self.heights_hide(view, p)
+    }
+}
+
 /// The part of rule 3 that depends on a box and the cell but not on the VO, computed once per
 /// box for every VO of the cell: the grown footprint, the bottom and the top.
 #[derive(Clone, Copy, Debug)]
@@ -513,6 +577,66 @@ mod tests {
         ] {
             assert_eq!(p.cover(&v, &inner), Cover::Hidden);
         }
+    }
+
+    #[test]
+    fn half_planes_found_inside_a_group_need_no_test_below_it() {
+        // Random VOs around a 10 m cell, random groups and boxes inside them: testing only the
+        // half-planes the group was not found strictly inside answers as testing all three.
+        let mut x: u64 = 987654321;
+        let mut r = |lo: f64, hi: f64| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        let v = view();
+        let (mut skipped, mut hidden) = (0, 0);
+        for _ in 0..3000 {
+            let vo = VoGeom {
+                a: [r(-60.0, 70.0), r(-60.0, 70.0)],
+                b: [r(-60.0, 70.0), r(-60.0, 70.0)],
+                g: 0.0,
+                h: r(2.0, 30.0),
+            };
+            let p = PreparedVo::new(&v, &vo);
+            let (cx, cy) = (r(-150.0, 160.0), r(-150.0, 160.0));
+            let outer = [
+                cx,
+                cy,
+                0.0,
+                cx + r(1.0, 60.0),
+                cy + r(1.0, 60.0),
+                r(1.0, 60.0),
+            ];
+            let g = GroupProbe::new(&v, &outer, r(0.0, outer[5]));
+            let (c, left) = p.cover_group_planes(&v, &g, ALL_PLANES);
+            assert_eq!(c, p.cover_group_probe(&v, &g), "{vo:?} {outer:?}");
+            if c != Cover::Partial {
+                continue;
+            }
+            skipped += usize::from(left != ALL_PLANES);
+            for _ in 0..20 {
+                let (x0, x1) = (r(outer[0], outer[3]), r(outer[0], outer[3]));
+                let (y0, y1) = (r(outer[1], outer[4]), r(outer[1], outer[4]));
+                let z1 = r(0.0, outer[5]);
+                let inner = [x0.min(x1), y0.min(y1), 0.0, x0.max(x1), y0.max(y1), z1];
+                let gi = GroupProbe::new(&v, &inner, r(0.0, z1));
+                assert_eq!(
+                    p.cover_group_planes(&v, &gi, left).0,
+                    p.cover_group_probe(&v, &gi),
+                    "{vo:?} {outer:?} {inner:?}"
+                );
+                let pi = Probe::new(&v, &inner);
+                let h = p.hides_probe(&v, &pi);
+                assert_eq!(p.hides_probe_planes(&v, &pi, left), h, "{vo:?} {inner:?}");
+                hidden += usize::from(h);
+            }
+        }
+        assert!(
+            skipped > 100 && hidden > 100,
+            "{skipped} groups skipped a half-plane, {hidden} boxes hidden"
+        );
     }
 
     /// Rule 3 written out plainly: every grown corner strictly inside all nine umbra
