@@ -13,7 +13,9 @@
 //!   monotone), which lets the culler cull a whole subtree at once.
 //! - the culler's box test, [`PreparedVo::hides_probe`], is `cover == Hidden` with the same
 //!   arithmetic in the same order, only cheaper (each form's least value alone); a test checks
-//!   the two agree.
+//!   the two agree. Its group and box tests that skip the half-planes an enclosing group lies
+//!   strictly inside ([`PreparedVo::cover_group_planes`], [`PreparedVo::hides_probe_planes`])
+//!   answer as the full tests, bit for bit (monotone rounding; a test checks them too).
 //!
 //! ## The 2D umbra of a segment from a convex cell
 //! Let the cell lie strictly left of the directed line `a -> b` (swap `a` and `b` otherwise; if
@@ -237,19 +239,7 @@ impl PreparedVo {
     /// greatest value, to tell `Outside` from `Partial`).
     #[inline]
     pub fn hides_probe(&self, view: &CellView, p: &Probe) -> bool {
-        if !self.usable {
-            return false;
-        }
-        let [x0, y0, x1, y1] = p.fp;
-        for k in &self.planes {
-            let (px0, px1) = (k[0] * x0, k[0] * x1);
-            let (py0, py1) = (k[1] * y0, k[1] * y1);
-            // The same sum, in the same order, as `min` in [`Self::footprint`].
-            if !(min(px0, px1) + min(py0, py1) + k[2] > 0.0) {
-                return false;
-            }
-        }
-        self.heights_hide(view, p)
+        self.hides_probe_planes(view, p, ALL_PLANES)
     }
 
     /// The height part of rule 3, for a probe whose footprint is strictly inside the umbra.
@@ -401,6 +391,7 @@ impl PreparedVo {
             }
             let (px0, px1) = (f[0] * x0, f[0] * x1);
             let (py0, py1) = (f[1] * y0, f[1] * y1);
+            // The same sum, in the same order, as `min` in [`Self::footprint`].
             if !(min(px0, px1) + min(py0, py1) + f[2] > 0.0) {
                 return false;
             }
