@@ -15,15 +15,15 @@
 //!   no box inside can be hidden by it). Property tests check the result against the box-by-box
 //!   rule. The VOs are tried in any order (the one that last hid something first), which
 //!   changes how many are tried, not the answer; a box is tested for `Hidden` alone
-//!   ([`PreparedVo::hides_probe`], the same arithmetic as `cover`). Each VO carries down the
-//!   walk the half-planes of its umbra that the bounds above were not found strictly inside;
-//!   the others are not tested again below, with the same answer bit for bit (a footprint's
-//!   least value of a form, rounded as computed, only grows as the footprint shrinks:
-//!   [`PreparedVo::cover_group_planes`]). Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that
-//!   rule 3 grows by 1 mm) could tell the two apart, at a box lying within about 1e-12 m of an
-//!   umbra edge; even then the hierarchy stays sound: a subtree is culled only when its bounds
-//!   are hidden, which, by rule 3's margin, every box inside really is, and dropping a VO can
-//!   only keep more objects;
+//!   ([`PreparedVo::hides_probe`], the same arithmetic as `cover`). Only the rounding of rule
+//!   3's orientation signs (relative 1e-16, against boxes that rule 3 grows by 1 mm) could tell
+//!   the two apart, at a box lying within about 1e-12 m of an umbra edge; even then the
+//!   hierarchy stays sound: a subtree is culled only when its bounds are hidden, which, by rule
+//!   3's margin, every box inside really is, and dropping a VO can only keep more objects;
+//! - each VO carries down the walk the half-planes of its umbra that the bounds above were not
+//!   found strictly inside; the others are not tested again below, with the same answer bit
+//!   for bit (a form's least value over a footprint, rounded as computed, only grows as the
+//!   footprint shrinks: [`PreparedVo::cover_group_planes`]);
 //! - never culled: boxes that touch the cell (rule 3 refuses them), invalid boxes (a NaN or
 //!   infinite coordinate, or `min > max` on an axis; kept out of the hierarchy and always
 //!   returned), every object of a skipped cell, of a cell without VOs and of a cell id outside
@@ -569,9 +569,10 @@ fn test(
 }
 
 /// Whether a VO of `mask` (not empty) hides box `bx`: the VO-independent part of rule 3 once
-/// ([`Probe`]), then each VO's test, of the half-planes `planes` leaves it ([`test`]). VO `*last` is tried first, and becomes the VO that hid
-/// `bx`: a VO that hid a box tends to hide the next boxes of the depth-first walk too, which
-/// are its neighbours. The order changes no answer, only how many VOs are tried.
+/// ([`Probe`]), then each VO's test, of the half-planes `planes` leaves it ([`test`]). VO
+/// `*last` is tried first, and becomes the VO that hid `bx`: a VO that hid a box tends to hide
+/// the next boxes of the depth-first walk too, which are its neighbours. The order changes no
+/// answer, only how many VOs are tried.
 #[inline]
 fn hidden(
     prepared: &[PreparedVo; MAX_VOS_PER_CELL],

@@ -570,26 +570,36 @@ mod tests {
         }
     }
 
-    #[test]
-    fn half_planes_found_inside_a_group_need_no_test_below_it() {
-        // Random VOs around a 10 m cell, random groups and boxes inside them: testing only the
-        // half-planes the group was not found strictly inside answers as testing all three.
-        let mut x: u64 = 987654321;
-        let mut r = |lo: f64, hi: f64| {
+    /// A fixed linear congruential sequence of uniform numbers in `[lo, hi)`.
+    fn lcg(seed: u64) -> impl FnMut(f64, f64) -> f64 {
+        let mut x = seed;
+        move |lo, hi| {
             x = x
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
-        };
+        }
+    }
+
+    /// A random VO standing on the ground around the 10 m cell of [`view`].
+    fn random_vo(r: &mut impl FnMut(f64, f64) -> f64) -> VoGeom {
+        VoGeom {
+            a: [r(-60.0, 70.0), r(-60.0, 70.0)],
+            b: [r(-60.0, 70.0), r(-60.0, 70.0)],
+            g: 0.0,
+            h: r(2.0, 30.0),
+        }
+    }
+
+    #[test]
+    fn half_planes_found_inside_a_group_need_no_test_below_it() {
+        // Random VOs around a 10 m cell, random groups and boxes inside them: testing only the
+        // half-planes the group was not found strictly inside answers as testing all three.
+        let mut r = lcg(987654321);
         let v = view();
         let (mut skipped, mut hidden) = (0, 0);
         for _ in 0..3000 {
-            let vo = VoGeom {
-                a: [r(-60.0, 70.0), r(-60.0, 70.0)],
-                b: [r(-60.0, 70.0), r(-60.0, 70.0)],
-                g: 0.0,
-                h: r(2.0, 30.0),
-            };
+            let vo = random_vo(&mut r);
             let p = PreparedVo::new(&v, &vo);
             let (cx, cy) = (r(-150.0, 160.0), r(-150.0, 160.0));
             let outer = [
@@ -696,22 +706,11 @@ mod tests {
     #[test]
     fn rule_3_with_the_tighter_bound_hides_only_what_3d_rays_show_hidden() {
         // A fixed linear congruential sequence: VOs around a 10 m cell, boxes around them.
-        let mut x: u64 = 12345;
-        let mut r = |lo: f64, hi: f64| {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
-        };
+        let mut r = lcg(12345);
         let v = view();
         let (mut hidden, mut outside, mut gained, mut below) = (0, 0, 0, 0);
         for _ in 0..4000 {
-            let vo = VoGeom {
-                a: [r(-60.0, 70.0), r(-60.0, 70.0)],
-                b: [r(-60.0, 70.0), r(-60.0, 70.0)],
-                g: 0.0,
-                h: r(2.0, 30.0),
-            };
+            let vo = random_vo(&mut r);
             let p = PreparedVo::new(&v, &vo);
             for _ in 0..10 {
                 let (cx, cy, w, d) = (
