@@ -355,11 +355,15 @@ impl PreparedVo {
             return (Cover::Outside, 0);
         }
         let [x0, y0, x1, y1] = g.probe.fp;
+        let todo = todo & ALL_PLANES;
         let mut left = todo;
-        for (k, f) in self.planes.iter().enumerate() {
-            if todo & (1 << k) == 0 {
-                continue;
-            }
+        // Over the set bits only: a loop over all three forms that skips the others ran 10%
+        // more of the culler's instructions.
+        let mut t = todo;
+        while t != 0 {
+            let k = t.trailing_zeros() as usize;
+            t &= t - 1;
+            let Some(f) = self.planes.get(k) else { break };
             let (px0, px1) = (f[0] * x0, f[0] * x1);
             let (py0, py1) = (f[1] * y0, f[1] * y1);
             // The same sums, in the same order, as in [`Self::footprint`].
@@ -385,10 +389,11 @@ impl PreparedVo {
             return false;
         }
         let [x0, y0, x1, y1] = p.fp;
-        for (k, f) in self.planes.iter().enumerate() {
-            if todo & (1 << k) == 0 {
-                continue;
-            }
+        let mut t = todo & ALL_PLANES;
+        while t != 0 {
+            let k = t.trailing_zeros() as usize;
+            t &= t - 1;
+            let Some(f) = self.planes.get(k) else { break };
             let (px0, px1) = (f[0] * x0, f[0] * x1);
             let (py0, py1) = (f[1] * y0, f[1] * y1);
             // The same sum, in the same order, as `min` in [`Self::footprint`].
