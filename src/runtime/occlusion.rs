@@ -73,6 +73,9 @@ pub struct PreparedVo {
     beyond_form: [f64; 3],
     /// False when the VO's line meets the cell: its umbra is empty.
     usable: bool,
+    /// `e0 >= g` and `h >= e1` for the view it was prepared for: without both, rule 3 hides
+    /// no box (its first test, the same for every box).
+    heights_ok: bool,
     /// The umbra's binding half-planes as linear forms `f(p) = k[0] p.x + k[1] p.y + k[2]`,
     /// `f > 0` inside: `-orient(a, b, p)`, `orient(c_a, a, p)` and `orient(c_b, p, b)` (the same
     /// polynomials as the orientation tests, expanded). Of the constraints `orient(c, a, p) >= 0`
@@ -131,6 +134,7 @@ impl PreparedVo {
         inv_d_line_lo: 0.0,
         beyond_form: [0.0; 3],
         usable: false,
+        heights_ok: false,
         planes: [[0.0; 3]; 3],
     };
 
@@ -190,6 +194,7 @@ impl PreparedVo {
             g: vo.g,
             h: vo.h,
             usable: usable && d_line.is_finite(),
+            heights_ok: view.e0 >= vo.g && vo.h >= view.e1,
         }
     }
 
@@ -247,7 +252,7 @@ impl PreparedVo {
     fn heights_hide(&self, view: &CellView, p: &Probe) -> bool {
         // Heights (ARCHITECTURE.md, rule 3): with the factor `F = 1 + dl / d_line >= 1`, the
         // box is hidden when `zmax <= e1 + (h - e1) F` and `zmin >= e0 - (e0 - g) F`.
-        if !(view.e0 >= self.g && self.h >= view.e1) {
+        if !self.heights_ok {
             return false;
         }
         // A box touching the cell is refused outright. (Tested here, not in [`Probe::new`]: few
