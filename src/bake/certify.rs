@@ -23,7 +23,7 @@
 use glam::DVec2;
 
 use super::quantize::{quantize, Refused};
-use super::slice::{d_near, line_lambda, Support};
+use super::slice::{d_near, line_lambda, point_segment_distance, Support};
 use crate::geom::predicates::point_in_umbra;
 use crate::geom::verify::{BlockerIndex, Verifier};
 use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
@@ -134,19 +134,26 @@ impl<'a> Certifier<'a> {
             .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
         let mut out = std::collections::BTreeMap::new();
         for (i, &(p, s)) in self.blockers.iter().enumerate() {
-            let (pl, ph) = p
-                .iter()
-                .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(l, u), v| {
-                    (l.min(*v), u.max(*v))
-                });
+            let (pl, ph) = self.index.bounds(i as u32);
             if !(pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y) {
                 continue;
             }
             let line = line_lambda(self.cell, p, a, b);
-            let dbs = d_near(p, &[a, b]);
-            let top = (1..HEIGHT_LEVELS)
-                .rev()
-                .find(|&l| s.supports_beside(e0, e1, g, self.frame.vo_top(e1, l), dn, dbs, line));
+            let top_at = |dbs: f64| {
+                (1..HEIGHT_LEVELS).rev().find(|&l| {
+                    s.supports_beside(e0, e1, g, self.frame.vo_top(e1, l), dn, dbs, line)
+                })
+            };
+            // The level falls as the distance between blocker and segment does (rule 2's
+            // bound grows), and that distance, `d_near`, lies between 0 and one of the
+            // vertex-to-segment distances it takes the least of: when the levels at both ends
+            // agree, it is not needed (3n such distances).
+            let far = top_at(point_segment_distance(p[0], a, b));
+            let top = if far.is_none() || top_at(0.0) == far {
+                far
+            } else {
+                top_at(d_near(p, &[a, b]))
+            };
             if let Some(l) = top {
                 out.insert(i as u32, l);
             }

@@ -41,7 +41,7 @@ pub fn d_far(p: &[DVec2], q: &[DVec2]) -> f64 {
     m.sqrt() * (1.0 + DIST_ROUND) + DIST_ROUND
 }
 
-fn point_segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+pub(crate) fn point_segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     let d = b - a;
     let l2 = d.length_squared();
     let t = if l2 > 0.0 {

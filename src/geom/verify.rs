@@ -218,6 +218,8 @@ struct NearCache<'a> {
     /// The blockers of `ids`, in the same order, and their boxes.
     polys: Vec<&'a [DVec2]>,
     boxes: Vec<(DVec2, DVec2)>,
+    /// Scratch: `ids` keyed by distance, while they are put in order.
+    keyed: Vec<(f64, u32)>,
 }
 
 /// How many of a stretch's blockers are put in order of distance (the rest follow unordered).
@@ -358,6 +360,11 @@ impl<'a> BlockerIndex<'a> {
 
     pub fn len(&self) -> usize {
         self.polys.len()
+    }
+
+    /// The bounding box of blocker `i`.
+    pub fn bounds(&self, i: u32) -> (DVec2, DVec2) {
+        self.boxes[i as usize]
     }
 
     pub fn is_empty(&self) -> bool {
@@ -631,7 +638,7 @@ impl<'a> Verifier<'a> {
     /// convex hull of the cell and the segment (a float filter that drops only blockers clear of
     /// it by a margin; every segment from the cell to `[a, b]` lies in the hull, and leaving a
     /// blocker out can only certify less).
-    fn near(&self, a: DVec2, b: DVec2) -> Vec<u32> {
+    fn near(&self, a: DVec2, b: DVec2, out: &mut Vec<u32>) {
         let hull = convex_hull(self.cell.iter().copied().chain([a, b]));
         let (lo, hi) = bbox(&hull);
         // Each hull edge as an outward half-plane `n . x > c + m`: a box wholly beyond one,
@@ -656,7 +663,7 @@ impl<'a> Verifier<'a> {
                 n.x * x + n.y * y > c
             })
         };
-        let mut out = Vec::new();
+        out.clear();
         let mut seen = self.seen.borrow_mut();
         let (stamps, stamp) = &mut *seen;
         if stamps.len() != self.index().len() || *stamp == u32::MAX {
@@ -675,7 +682,6 @@ impl<'a> Verifier<'a> {
                     out.push(i);
                 }
             });
-        out
     }
 
     /// [`Self::near`] of the piece `[j, k]`, from the cache when it covers the piece; otherwise
@@ -693,13 +699,17 @@ impl<'a> Verifier<'a> {
                 .at_or_below(end, k)
                 .unwrap_or((k, par.at(k).unwrap_or(par.b)));
             let q = par.at(j).unwrap_or(par.a);
-            let mut ids = self.near(q, pe);
+            // The previous stretch's buffers are reused (this runs for every new stretch).
+            let mut ids = std::mem::take(&mut cache.ids);
+            self.near(q, pe, &mut ids);
             // Nearest the stretch's start first (ties by id: deterministic).
             let dist = |i: u32| {
                 let (lo, hi) = self.bounds(i);
                 (lo - q).max(q - hi).max(DVec2::ZERO).length_squared()
             };
-            let mut keyed: Vec<(f64, u32)> = ids.iter().map(|&i| (dist(i), i)).collect();
+            let keyed = &mut cache.keyed;
+            keyed.clear();
+            keyed.extend(ids.iter().map(|&i| (dist(i), i)));
             let by = |a: &(f64, u32), b: &(f64, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
             // The search reads the nearest first and mostly stops among them: only those are
             // put in order, the rest follow in a fixed order (deterministic all the same).
@@ -710,7 +720,7 @@ impl<'a> Verifier<'a> {
                 keyed.sort_unstable_by(by);
             }
             ids.clear();
-            ids.extend(keyed.into_iter().map(|x| x.1));
+            ids.extend(keyed.iter().map(|x| x.1));
             cache.polys.clear();
             cache.polys.extend(ids.iter().map(|&i| self.poly(i)));
             cache.boxes.clear();
@@ -772,6 +782,7 @@ impl<'a> Verifier<'a> {
             ids: Vec::new(),
             polys: Vec::new(),
             boxes: Vec::new(),
+            keyed: Vec::new(),
         };
         // The last point that could not be certified, after which the sweep stepped on.
         let mut failed: Option<u64> = None;
