@@ -137,23 +137,49 @@ impl HiddenMap {
 
     /// Builds the map of `cell` from the outward-facing `edges` of the slice's blockers.
     pub fn build(cell: &[DVec2; 4], edges: &[(DVec2, DVec2)], p: &MapParams) -> HiddenMap {
+        let member = vec![1u8; edges.len()];
+        let mut maps = Self::build_slices(cell, edges, &member, 1, p);
+        maps.pop().expect("one slice asked, one map built")
+    }
+
+    /// The maps of `cell` for `slices` slices at once (at most 8), from the union of their
+    /// edges: `edges[i]` is an edge of slice `s` when bit `s` of `member[i]` is set. Each map is
+    /// the one [`Self::build`] gives from that slice's edges alone: a bin's depth is the least
+    /// hit distance over the slice's edges, whatever their order, and an edge (or a group of
+    /// them) is passed over for a slice only when that slice's buffer already lies wholly in
+    /// front of it. The work per edge and bin (its hit distance) is shared by every slice
+    /// that has the edge, where a map per slice computed it once per slice.
+    pub fn build_slices(
+        cell: &[DVec2; 4],
+        edges: &[(DVec2, DVec2)],
+        member: &[u8],
+        slices: usize,
+        p: &MapParams,
+    ) -> Vec<HiddenMap> {
+        assert!(
+            edges.len() == member.len() && slices <= 8,
+            "one slice mask per edge, 8 slices"
+        );
         let centre = (cell[0] + cell[2]) * 0.5;
         let n = ((2.0 * p.half) / p.px).ceil() as usize;
-        let mut map = HiddenMap {
-            lo: centre - DVec2::splat(p.half),
-            px: p.px,
-            n,
-            visible: vec![0; (n * n).div_ceil(64)],
-        };
+        let (origin, px) = (centre - DVec2::splat(p.half), p.px);
+        let mut maps: Vec<HiddenMap> = (0..slices)
+            .map(|_| HiddenMap {
+                lo: origin,
+                px: p.px,
+                n,
+                visible: vec![0; (n * n).div_ceil(64)],
+            })
+            .collect();
         let bins = (p.bins.max(TILE) / TILE * TILE).next_power_of_two();
         let scale = bins as f64 / 4.0;
         let dirs: Vec<DVec2> = (0..bins)
             .map(|k| direction((k as f64 + 0.5) / scale))
             .collect();
         let far = p.half * std::f64::consts::SQRT_2 + p.px;
-        let groups = Groups::new(edges, centre);
-        let mut depth = vec![far; bins];
-        let mut tile = vec![far; bins / TILE];
+        let groups = Groups::new(edges, member, centre);
+        let mut depth = vec![vec![far; bins]; slices];
+        let mut tile = vec![vec![far; bins / TILE]; slices];
         // Eyes on each edge, with the outward normal of that edge (corners: of both edges). A ray
         // into the cell crosses it and leaves through another edge, whose own eyes see beyond
         // it, so only rays leaving the cell are cast.
@@ -194,17 +220,34 @@ impl HiddenMap {
                 .filter(|(a, b)| a <= b)
                 .all(|&(a, b)| (a / TILE..=b / TILE).all(|t| tile[t] <= dmin))
         };
+        // The slices of `mask` whose buffer does not already lie wholly in front of `r` at
+        // distance `dmin`.
+        let open = |tile: &[Vec<f64>], mask: u8, r: [(usize, usize); 2], dmin: f64| {
+            let mut live = 0u8;
+            let mut m = mask;
+            while m != 0 {
+                let s = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if !hidden_behind(&tile[s], r, dmin) {
+                    live |= 1 << s;
+                }
+            }
+            live
+        };
         for &(e, out1, out2) in &eyes {
-            depth.fill(far);
-            tile.fill(far);
+            for s in 0..slices {
+                depth[s].fill(far);
+                tile[s].fill(far);
+            }
             let outward = |x: DVec2| (x - e).dot(out1) > 0.0 || (x - e).dot(out2) > 0.0;
             for g in &groups.groups {
-                // A whole group behind what is already in the buffer is skipped.
+                // A whole group behind what is already in a slice's buffer is skipped for it.
                 let (lo, hi) = g.bounds;
                 let inside = e.x >= lo.x - 1.0
                     && e.x <= hi.x + 1.0
                     && e.y >= lo.y - 1.0
                     && e.y <= hi.y + 1.0;
+                let mut live = g.member;
                 if !inside {
                     let dmin = (lo - e).max(e - hi).max(DVec2::ZERO).length();
                     if dmin >= far {
@@ -227,13 +270,18 @@ impl HiddenMap {
                         dhi = dhi.max(d);
                     }
                     let wrap = |x: f64| x.rem_euclid(4.0);
-                    if dhi - dlo < 2.0
-                        && hidden_behind(&tile, spans(wrap(pc + dlo), wrap(pc + dhi)), dmin)
-                    {
-                        continue;
+                    if dhi - dlo < 2.0 {
+                        live = open(&tile, live, spans(wrap(pc + dlo), wrap(pc + dhi)), dmin);
+                        if live == 0 {
+                            continue;
+                        }
                     }
                 }
                 for &i in &groups.ids[g.range.0..g.range.1] {
+                    let mask = member[i as usize] & live;
+                    if mask == 0 {
+                        continue;
+                    }
                     let (u, v) = edges[i as usize];
                     // Front-facing only: the eye strictly on the outer (right) side.
                     if (v - u).perp_dot(e - u) >= 0.0 || !(outward(u) || outward(v)) {
@@ -245,7 +293,8 @@ impl HiddenMap {
                     }
                     // Seen from e, the edge runs counter-clockwise from v to u.
                     let ranges = spans(pseudo_angle(v - e), pseudo_angle(u - e));
-                    if hidden_behind(&tile, ranges, dmin) {
+                    let todo = open(&tile, mask, ranges, dmin);
+                    if todo == 0 {
                         continue;
                     }
                     let w = v - u;
@@ -260,14 +309,26 @@ impl HiddenMap {
                                 continue;
                             }
                             let t = num / den;
-                            if t >= 0.0 && t < depth[k] {
-                                depth[k] = t;
+                            if t >= 0.0 {
+                                let mut m = todo;
+                                while m != 0 {
+                                    let s = m.trailing_zeros() as usize;
+                                    m &= m - 1;
+                                    if t < depth[s][k] {
+                                        depth[s][k] = t;
+                                    }
+                                }
                             }
                         }
-                        for t in r0 / TILE..=r1 / TILE {
-                            tile[t] = depth[t * TILE..(t + 1) * TILE]
-                                .iter()
-                                .fold(0.0f64, |m, &d| m.max(d));
+                        let mut m = todo;
+                        while m != 0 {
+                            let s = m.trailing_zeros() as usize;
+                            m &= m - 1;
+                            for t in r0 / TILE..=r1 / TILE {
+                                tile[s][t] = depth[s][t * TILE..(t + 1) * TILE]
+                                    .iter()
+                                    .fold(0.0f64, |m, &d| m.max(d));
+                            }
                         }
                     }
                 }
@@ -275,36 +336,38 @@ impl HiddenMap {
             // March every outward bin's ray up to its depth, marking the pixels it crosses. Rays
             // of a coarser level (more trailing zeros) are spaced less than a pixel apart up to
             // some distance; a finer ray starts there, or where a coarser neighbour stopped.
-            let o = (e - map.lo) / p.px;
+            let o = (e - origin) / px;
             let dtheta = std::f64::consts::TAU / bins as f64;
-            for k in 0..bins {
-                let d = dirs[k];
-                if d.dot(out1) < 0.0 && d.dot(out2) < 0.0 {
-                    continue;
-                }
-                let len = depth[k].min(far);
-                let start = if k == 0 {
-                    0.0
-                } else {
-                    let tz = k.trailing_zeros();
-                    let s = 1usize << tz;
-                    let neighbours = depth[k - s].min(depth[(k + s) % bins]);
-                    (p.px / ((2 << tz) as f64 * dtheta)).min(neighbours)
-                };
-                if start < len {
-                    let first = (start / p.px) as usize;
-                    let steps = (len / p.px) as usize;
-                    let mut q = o + d * first as f64;
-                    for _ in first..=steps {
-                        map.mark(q);
-                        q += d;
+            for (map, depth) in maps.iter_mut().zip(&depth) {
+                for k in 0..bins {
+                    let d = dirs[k];
+                    if d.dot(out1) < 0.0 && d.dot(out2) < 0.0 {
+                        continue;
                     }
+                    let len = depth[k].min(far);
+                    let start = if k == 0 {
+                        0.0
+                    } else {
+                        let tz = k.trailing_zeros();
+                        let s = 1usize << tz;
+                        let neighbours = depth[k - s].min(depth[(k + s) % bins]);
+                        (p.px / ((2 << tz) as f64 * dtheta)).min(neighbours)
+                    };
+                    if start < len {
+                        let first = (start / p.px) as usize;
+                        let steps = (len / p.px) as usize;
+                        let mut q = o + d * first as f64;
+                        for _ in first..=steps {
+                            map.mark(q);
+                            q += d;
+                        }
+                    }
+                    // The pixel holding the end point (the surface itself).
+                    map.mark(o + d * (len / p.px));
                 }
-                // The pixel holding the end point (the surface itself).
-                map.mark(o + d * (len / p.px));
             }
         }
-        map
+        maps
     }
 }
 
@@ -318,12 +381,14 @@ struct Groups {
 struct Group {
     bounds: (DVec2, DVec2),
     range: (usize, usize),
+    /// The slices its edges belong to (bits, as in [`HiddenMap::build_slices`]).
+    member: u8,
 }
 
 impl Groups {
     const SIZE_M: f64 = 32.0;
 
-    fn new(edges: &[(DVec2, DVec2)], centre: DVec2) -> Groups {
+    fn new(edges: &[(DVec2, DVec2)], member: &[u8], centre: DVec2) -> Groups {
         let key = |p: DVec2| {
             let k = ((p - centre) / Self::SIZE_M).floor();
             (k.x as i64, k.y as i64)
@@ -341,16 +406,19 @@ impl Groups {
             let k = keyed[i].0;
             let start = ids.len();
             let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+            let mut m = 0u8;
             while i < keyed.len() && keyed[i].0 == k {
                 let (u, v) = edges[keyed[i].1 as usize];
                 lo = lo.min(u).min(v);
                 hi = hi.max(u).max(v);
+                m |= member[keyed[i].1 as usize];
                 ids.push(keyed[i].1);
                 i += 1;
             }
             groups.push(Group {
                 bounds: (lo, hi),
                 range: (start, ids.len()),
+                member: m,
             });
         }
         groups.sort_by(|a, b| {
@@ -468,16 +536,37 @@ impl EdgeTwins {
         polys: &[P],
         ids: &[u32],
     ) -> Vec<(DVec2, DVec2)> {
-        debug_assert!(ids.windows(2).all(|w| w[0] < w[1]));
         let mut out: Vec<(DVec2, DVec2)> = Vec::new();
         let mut walls: Vec<(DVec2, DVec2)> = Vec::new();
+        self.each_boundary_edge(polys, ids, |key, u, v| {
+            if key & WALL_EDGE == 0 {
+                out.push((u, v));
+            } else {
+                walls.push((u, v));
+            }
+        });
+        out.extend(walls);
+        out
+    }
+
+    /// [`Self::boundary_edges`], each edge given to `f` with a key that names it among all the
+    /// edges of `polys` (blocker index in the high 32 bits, edge index in the low ones; a
+    /// wall's two directions 0 and 1, with [`WALL_EDGE`] set), in the order of `ids`.
+    pub fn each_boundary_edge<P: AsRef<[DVec2]>>(
+        &self,
+        polys: &[P],
+        ids: &[u32],
+        mut f: impl FnMut(u64, DVec2, DVec2),
+    ) {
+        debug_assert!(ids.windows(2).all(|w| w[0] < w[1]));
         for &i in ids {
             let p = polys[i as usize].as_ref();
+            let key = (i as u64) << 32;
             match p.len() {
                 0 | 1 => {}
                 2 => {
-                    walls.push((p[0], p[1]));
-                    walls.push((p[1], p[0]));
+                    f(key | WALL_EDGE, p[0], p[1]);
+                    f(key | WALL_EDGE | 1, p[1], p[0]);
                 }
                 n => {
                     let e0 = self.first_edge[i as usize] as usize;
@@ -487,16 +576,17 @@ impl EdgeTwins {
                             .iter()
                             .any(|t| ids.binary_search(t).is_ok());
                         if !inside {
-                            out.push((p[k], p[(k + 1) % n]));
+                            f(key | k as u64, p[k], p[(k + 1) % n]);
                         }
                     }
                 }
             }
         }
-        out.extend(walls);
-        out
     }
 }
+
+/// The bit of an edge key ([`EdgeTwins::each_boundary_edge`]) that marks a wall's direction.
+pub const WALL_EDGE: u64 = 1 << 31;
 
 #[cfg(test)]
 mod tests {
@@ -567,6 +657,80 @@ mod tests {
         assert!(!map.hidden(DVec2::new(50.0, 120.0)), "in front of the row");
         assert!(!map.hidden(DVec2::new(500.0, 200.0)), "beyond its end");
         assert!(!map.hidden(DVec2::new(50.0, -200.0)), "the other side");
+    }
+
+    #[test]
+    fn maps_built_together_are_the_maps_built_one_slice_at_a_time() {
+        // Pieces of blocks around a cell, some split in two (their shared edge is inside while
+        // both pieces are in a slice, outside once one is left out), at random heights; three
+        // slices keep the pieces at least 5, 15 and 25 m tall.
+        let cell = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(100.0, 0.0),
+            DVec2::new(100.0, 100.0),
+            DVec2::new(0.0, 100.0),
+        ];
+        let mut seed = 11u64;
+        let mut next = |n: u64| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) % n
+        };
+        let mut polys: Vec<Vec<DVec2>> = Vec::new();
+        let mut heights: Vec<f64> = Vec::new();
+        for bx in -6..8 {
+            for by in -6..8 {
+                if (0..=1).contains(&bx) && (0..=1).contains(&by) {
+                    continue;
+                }
+                let (x, y) = (bx as f64 * 60.0 + 5.0, by as f64 * 60.0 + 5.0);
+                let w = 20.0 + next(25) as f64;
+                polys.push(sq(x, y, w));
+                heights.push(next(30) as f64);
+                if next(2) == 0 {
+                    polys.push(sq(x + w, y, w));
+                    heights.push(next(30) as f64);
+                }
+            }
+        }
+        let twins = EdgeTwins::new(&polys);
+        let p = MapParams::default();
+        let tops = [5.0, 15.0, 25.0];
+        let mut all: Vec<(u64, u8, DVec2, DVec2)> = Vec::new();
+        let mut alone = Vec::new();
+        for (s, &t) in tops.iter().enumerate() {
+            let ids: Vec<u32> = (0..polys.len() as u32)
+                .filter(|&i| heights[i as usize] >= t)
+                .collect();
+            alone.push(HiddenMap::build(
+                &cell,
+                &twins.boundary_edges(&polys, &ids),
+                &p,
+            ));
+            twins.each_boundary_edge(&polys, &ids, |k, u, v| all.push((k, s as u8, u, v)));
+        }
+        all.sort_unstable_by_key(|x| (x.0, x.1));
+        let (mut edges, mut member) = (Vec::new(), Vec::<u8>::new());
+        let mut last = None;
+        for (k, s, u, v) in all {
+            if last != Some(k) {
+                last = Some(k);
+                edges.push((u, v));
+                member.push(0);
+            }
+            *member.last_mut().unwrap() |= 1 << s;
+        }
+        assert!(
+            member.iter().any(|&m| m == 0b110),
+            "an edge exposed above the lowest slice"
+        );
+        let together = HiddenMap::build_slices(&cell, &edges, &member, tops.len(), &p);
+        for (s, (a, b)) in together.iter().zip(&alone).enumerate() {
+            assert_eq!(a.visible, b.visible, "slice {s}");
+        }
+        let shares: Vec<f64> = alone.iter().map(|m| m.hidden_share()).collect();
+        assert!(shares[0] > shares[2] && shares[2] > 0.0, "{shares:?}");
     }
 
     /// The boundary edges of all of `polys`.

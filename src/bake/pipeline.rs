@@ -639,20 +639,52 @@ impl<'s> Plan<'s> {
         };
         let mut t = Instant::now();
         let mut all_props: Vec<(u8, DVec2, DVec2)> = Vec::new();
-        for &k in &stats.levels.clone() {
-            let h = levels[k as usize];
-            let ids: Vec<u32> = near
-                .iter()
-                .zip(support)
-                .filter(|(_, s)| s.top >= h)
-                .map(|(&i, _)| i)
-                .collect();
-            let edges = self.twins.boundary_edges(&self.set.polys, &ids);
-            let map = super::hidden::HiddenMap::build(cell, &edges, &self.params.map);
+        // Every slice's boundary edges, each edge once with the slices it belongs to: the maps
+        // are built together (8 slices at a time), each edge's hit distances computed once for
+        // all its slices.
+        for chunk in stats.levels.clone().chunks(8) {
+            // (edge key, slice, ends), then one entry per edge with its slices as bits.
+            let mut all: Vec<(u64, u8, DVec2, DVec2)> = Vec::new();
+            for (s, &k) in chunk.iter().enumerate() {
+                let h = levels[k as usize];
+                let ids: Vec<u32> = near
+                    .iter()
+                    .zip(support)
+                    .filter(|(_, s)| s.top >= h)
+                    .map(|(&i, _)| i)
+                    .collect();
+                self.twins
+                    .each_boundary_edge(&self.set.polys, &ids, |key, u, v| {
+                        all.push((key, s as u8, u, v))
+                    });
+            }
+            all.sort_unstable_by_key(|x| (x.0, x.1));
+            let mut edges: Vec<(DVec2, DVec2)> = Vec::with_capacity(all.len());
+            let mut member: Vec<u8> = Vec::with_capacity(all.len());
+            let mut last = None;
+            for (key, s, u, v) in all {
+                if last != Some(key) {
+                    last = Some(key);
+                    edges.push((u, v));
+                    member.push(0);
+                }
+                if let Some(m) = member.last_mut() {
+                    *m |= 1 << s;
+                }
+            }
+            let maps = super::hidden::HiddenMap::build_slices(
+                cell,
+                &edges,
+                &member,
+                chunk.len(),
+                &self.params.map,
+            );
             stats.stage_ms[0] += clock(&mut t);
-            let props = super::propose::runs(cell, &map, &self.params.propose);
+            for (&k, map) in chunk.iter().zip(&maps) {
+                let props = super::propose::runs(cell, map, &self.params.propose);
+                all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
+            }
             stats.stage_ms[1] += clock(&mut t);
-            all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
         }
         // The same segment proposed at several levels: the highest (its map says hidden
         // there, and a taller VO hides at least as much).
