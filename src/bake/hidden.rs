@@ -3,7 +3,9 @@
 //! Input: a cell (convex, counter-clockwise rectangle), the blocker edges of one slice (2D
 //! segments, each facing outwards from its blocker, from [`EdgeTwins::boundary_edges`]), and a
 //! [`MapParams`] (eyes on the cell's boundary, angular bins, pixel size, window).
-//! Output: a [`HiddenMap`]: a square raster around the cell centre whose pixels are marked
+//! Output: a [`HiddenMap`] ([`HiddenMap::build_slices`]: one per slice, from one pass over the
+//! union of the slices' edges, each the map its slice's edges give alone): a square raster
+//! around the cell centre whose pixels are marked
 //! *visible* when some sampled ray from some eye reaches them before meeting an edge; the others
 //! count as hidden.
 //! Method: per eye, a polar depth buffer (the distance to the first edge along the central ray
@@ -147,8 +149,11 @@ impl HiddenMap {
     /// the one [`Self::build`] gives from that slice's edges alone: a bin's depth is the least
     /// hit distance over the slice's edges, whatever their order, and an edge (or a group of
     /// them) is passed over for a slice only when that slice's buffer already lies wholly in
-    /// front of it. The work per edge and bin (its hit distance) is shared by every slice
-    /// that has the edge, where a map per slice computed it once per slice.
+    /// front of its nearest point, where its hits cannot undercut the buffer (but by a rounding
+    /// of the two distances, which could differ in the order edges come; no store of the bundled
+    /// scenes or of a generated city of 10^5 buildings changed). The work per edge and bin (its
+    /// hit distance) is shared by every slice that has the edge, where a map per slice computed
+    /// it once per slice. A proposal tool all the same (module header).
     pub fn build_slices(
         cell: &[DVec2; 4],
         edges: &[(DVec2, DVec2)],
@@ -549,6 +554,37 @@ impl EdgeTwins {
         out
     }
 
+    /// The boundary edges of several slices' blockers (`slices[s]`: ascending ids, as for
+    /// [`Self::boundary_edges`]; at most 8 slices), each edge once, with the slices that have
+    /// it as bits (bit `s`: slice `s`), ordered by blocker and edge: the input of
+    /// [`HiddenMap::build_slices`].
+    pub fn slice_edges<P: AsRef<[DVec2]>>(
+        &self,
+        polys: &[P],
+        slices: &[Vec<u32>],
+    ) -> (Vec<(DVec2, DVec2)>, Vec<u8>) {
+        assert!(slices.len() <= 8, "at most 8 slices");
+        let mut all: Vec<(u64, u8, DVec2, DVec2)> = Vec::new();
+        for (s, ids) in slices.iter().enumerate() {
+            self.each_boundary_edge(polys, ids, |key, u, v| all.push((key, s as u8, u, v)));
+        }
+        all.sort_unstable_by_key(|x| (x.0, x.1));
+        let mut edges: Vec<(DVec2, DVec2)> = Vec::with_capacity(all.len());
+        let mut member: Vec<u8> = Vec::with_capacity(all.len());
+        let mut last = None;
+        for (key, s, u, v) in all {
+            if last != Some(key) {
+                last = Some(key);
+                edges.push((u, v));
+                member.push(0);
+            }
+            if let Some(m) = member.last_mut() {
+                *m |= 1 << s;
+            }
+        }
+        (edges, member)
+    }
+
     /// [`Self::boundary_edges`], each edge given to `f` with a key that names it among all the
     /// edges of `polys` (blocker index in the high 32 bits, edge index in the low ones; a
     /// wall's two directions 0 and 1, with [`WALL_EDGE`] set), in the order of `ids`.
@@ -697,9 +733,9 @@ mod tests {
         let twins = EdgeTwins::new(&polys);
         let p = MapParams::default();
         let tops = [5.0, 15.0, 25.0];
-        let mut all: Vec<(u64, u8, DVec2, DVec2)> = Vec::new();
         let mut alone = Vec::new();
-        for (s, &t) in tops.iter().enumerate() {
+        let mut slices = Vec::new();
+        for &t in &tops {
             let ids: Vec<u32> = (0..polys.len() as u32)
                 .filter(|&i| heights[i as usize] >= t)
                 .collect();
@@ -708,19 +744,9 @@ mod tests {
                 &twins.boundary_edges(&polys, &ids),
                 &p,
             ));
-            twins.each_boundary_edge(&polys, &ids, |k, u, v| all.push((k, s as u8, u, v)));
+            slices.push(ids);
         }
-        all.sort_unstable_by_key(|x| (x.0, x.1));
-        let (mut edges, mut member) = (Vec::new(), Vec::<u8>::new());
-        let mut last = None;
-        for (k, s, u, v) in all {
-            if last != Some(k) {
-                last = Some(k);
-                edges.push((u, v));
-                member.push(0);
-            }
-            *member.last_mut().unwrap() |= 1 << s;
-        }
+        let (edges, member) = twins.slice_edges(&polys, &slices);
         assert!(
             member.iter().any(|&m| m == 0b110),
             "an edge exposed above the lowest slice"

@@ -643,35 +643,18 @@ impl<'s> Plan<'s> {
         // are built together (8 slices at a time), each edge's hit distances computed once for
         // all its slices.
         for chunk in stats.levels.clone().chunks(8) {
-            // (edge key, slice, ends), then one entry per edge with its slices as bits.
-            let mut all: Vec<(u64, u8, DVec2, DVec2)> = Vec::new();
-            for (s, &k) in chunk.iter().enumerate() {
-                let h = levels[k as usize];
-                let ids: Vec<u32> = near
-                    .iter()
-                    .zip(support)
-                    .filter(|(_, s)| s.top >= h)
-                    .map(|(&i, _)| i)
-                    .collect();
-                self.twins
-                    .each_boundary_edge(&self.set.polys, &ids, |key, u, v| {
-                        all.push((key, s as u8, u, v))
-                    });
-            }
-            all.sort_unstable_by_key(|x| (x.0, x.1));
-            let mut edges: Vec<(DVec2, DVec2)> = Vec::with_capacity(all.len());
-            let mut member: Vec<u8> = Vec::with_capacity(all.len());
-            let mut last = None;
-            for (key, s, u, v) in all {
-                if last != Some(key) {
-                    last = Some(key);
-                    edges.push((u, v));
-                    member.push(0);
-                }
-                if let Some(m) = member.last_mut() {
-                    *m |= 1 << s;
-                }
-            }
+            let slices: Vec<Vec<u32>> = chunk
+                .iter()
+                .map(|&k| {
+                    let h = levels[k as usize];
+                    near.iter()
+                        .zip(support)
+                        .filter(|(_, s)| s.top >= h)
+                        .map(|(&i, _)| i)
+                        .collect()
+                })
+                .collect();
+            let (edges, member) = self.twins.slice_edges(&self.set.polys, &slices);
             let maps = super::hidden::HiddenMap::build_slices(
                 cell,
                 &edges,
