@@ -748,7 +748,7 @@ mod tests {
         }
         let (edges, member) = twins.slice_edges(&polys, &slices);
         assert!(
-            member.iter().any(|&m| m == 0b110),
+            member.contains(&0b110),
             "an edge exposed above the lowest slice"
         );
         let together = HiddenMap::build_slices(&cell, &edges, &member, tops.len(), &p);
