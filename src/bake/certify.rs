@@ -148,7 +148,10 @@ impl<'a> Certifier<'a> {
             // bound grows), and that distance, `d_near`, lies between 0 and one of the
             // vertex-to-segment distances it takes the least of: when the levels at both ends
             // agree, it is not needed (3n such distances).
-            let far = top_at(point_segment_distance(p[0], a, b));
+            let far = top_at(
+                p.first()
+                    .map_or(f64::INFINITY, |&v| point_segment_distance(v, a, b)),
+            );
             let top = if far.is_none() || top_at(0.0) == far {
                 far
             } else {

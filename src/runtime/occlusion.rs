@@ -362,13 +362,7 @@ impl PreparedVo {
         let [x0, y0, x1, y1] = g.probe.fp;
         let todo = todo & ALL_PLANES;
         let mut left = todo;
-        // Over the set bits only: a loop over all three forms that skips the others ran 10%
-        // more of the culler's instructions.
-        let mut t = todo;
-        while t != 0 {
-            let k = t.trailing_zeros() as usize;
-            t &= t - 1;
-            let Some(f) = self.planes.get(k) else { break };
+        for (k, f) in self.open_planes(todo) {
             let (px0, px1) = (f[0] * x0, f[0] * x1);
             let (py0, py1) = (f[1] * y0, f[1] * y1);
             // The same sums, in the same order, as in [`Self::footprint`].
@@ -385,6 +379,19 @@ impl PreparedVo {
         (self.group_partial(view, g), left)
     }
 
+    /// The umbra's forms whose bits are set in `todo`, with their bits. Over the set bits only:
+    /// a loop over all three forms that skipped the others ran 10% more of the culler's
+    /// instructions.
+    #[inline(always)]
+    fn open_planes(&self, todo: u8) -> impl Iterator<Item = (usize, &[f64; 3])> {
+        let mut t = todo & ALL_PLANES;
+        std::iter::from_fn(move || {
+            let k = (t != 0).then(|| t.trailing_zeros() as usize)?;
+            t &= t - 1;
+            Some((k, self.planes.get(k)?))
+        })
+    }
+
     /// [`Self::hides_probe`] for a box lying inside a group found strictly inside the
     /// half-planes missing from `todo` ([`Self::cover_group_planes`]): only those of `todo` are
     /// tested, with the same answer.
@@ -394,11 +401,7 @@ impl PreparedVo {
             return false;
         }
         let [x0, y0, x1, y1] = p.fp;
-        let mut t = todo & ALL_PLANES;
-        while t != 0 {
-            let k = t.trailing_zeros() as usize;
-            t &= t - 1;
-            let Some(f) = self.planes.get(k) else { break };
+        for (_, f) in self.open_planes(todo) {
             let (px0, px1) = (f[0] * x0, f[0] * x1);
             let (py0, py1) = (f[1] * y0, f[1] * y1);
             // The same sum, in the same order, as `min` in [`Self::footprint`].
