@@ -23,7 +23,8 @@
 //! - each VO carries down the walk the half-planes of its umbra that the bounds above were not
 //!   found strictly inside; the others are not tested again below, with the same answer bit
 //!   for bit (a form's least value over a footprint, rounded as computed, only grows as the
-//!   footprint shrinks: [`PreparedVo::cover_group_planes`]);
+//!   footprint shrinks: [`PreparedVo::cover_group_planes`]); so does the finding that the
+//!   bounds are apart from the cell, which holds for every box inside ([`Probe::within`]);
 //! - never culled: boxes that touch the cell (rule 3 refuses them), invalid boxes (a NaN or
 //!   infinite coordinate, or `min > max` on an axis; kept out of the hierarchy and always
 //!   returned), every object of a skipped cell, of a cell without VOs and of a cell id outside
@@ -525,14 +526,19 @@ fn planes_of(planes: u32, i: usize) -> u8 {
     (planes >> (3 * i)) as u8 & ALL_PLANES
 }
 
-/// Every half-plane of every VO still to test: where the walk starts.
-const ALL_VO_PLANES: u32 = (1 << (3 * MAX_VOS_PER_CELL)) - 1;
-const _: () = assert!(3 * MAX_VOS_PER_CELL < 32);
+/// Set while the subtree has not been found apart from the cell ([`Probe::within`]): the
+/// last bit of the word that carries the half-planes still to test down the walk.
+const APART_TODO: u32 = 1 << 31;
+
+/// Every half-plane of every VO still to test, and the cell's apartness: where the walk starts.
+const ALL_VO_PLANES: u32 = (1 << (3 * MAX_VOS_PER_CELL)) - 1 | APART_TODO;
+const _: () = assert!(3 * MAX_VOS_PER_CELL < 31);
 
 /// `None` when a VO of `mask` (not empty) hides `bx`, else the VOs of `mask` whose umbra `bx`
 /// meets, and for each of them the half-planes of its umbra that `bx` is not strictly inside
 /// (bits `3i..3i + 3` for VO `i`), which are all that the boxes below must test
-/// ([`PreparedVo::cover_group_planes`]); `planes` holds those of the parent. VO `*last` is
+/// ([`PreparedVo::cover_group_planes`]), and [`APART_TODO`] unless `bx` was found apart from
+/// the cell; `planes` holds those of the parent. VO `*last` is
 /// tried first, and becomes the VO that hid `bx` (see [`hidden`]).
 #[inline]
 fn test(
@@ -543,10 +549,10 @@ fn test(
     bx: &[f64; 6],
     min_top: f64,
 ) -> Option<(u16, u32)> {
-    let g = GroupProbe::new(view, bx, min_top);
+    let g = GroupProbe::within(view, bx, min_top, planes & APART_TODO == 0);
     let mut left = mask;
     let mut keep = mask;
-    let mut below = 0;
+    let mut below = if g.probe.is_apart() { 0 } else { APART_TODO };
     let mut i = *last;
     if mask & (1 << i) == 0 {
         i = left.trailing_zeros() as usize;
@@ -581,7 +587,7 @@ fn hidden(
     last: &mut usize,
     bx: &[f64; 6],
 ) -> bool {
-    let probe = Probe::new(view, bx);
+    let probe = Probe::within(view, bx, planes & APART_TODO == 0);
     let mut left = mask;
     let mut i = *last;
     if mask & (1 << i) == 0 {
