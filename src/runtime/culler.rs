@@ -531,7 +531,7 @@ fn planes_of(planes: u32, i: usize) -> u8 {
 const APART_TODO: u32 = 1 << 31;
 
 /// Every half-plane of every VO still to test, and the cell's apartness: where the walk starts.
-const ALL_VO_PLANES: u32 = (1 << (3 * MAX_VOS_PER_CELL)) - 1 | APART_TODO;
+const ALL_VO_PLANES: u32 = ((1 << (3 * MAX_VOS_PER_CELL)) - 1) | APART_TODO;
 const _: () = assert!(3 * MAX_VOS_PER_CELL < 31);
 
 /// `None` when a VO of `mask` (not empty) hides `bx`, else the VOs of `mask` whose umbra `bx`
