@@ -606,6 +606,70 @@ fn hidden(
     }
 }
 
+/// Marks object `id` visible in the bitmap `out` ([`pvs_with_stats`]).
+#[inline(always)]
+fn keep(out: &mut [u32], id: u32) {
+    out[(id >> 5) as usize] |= 1 << (id & 31);
+}
+
+/// One query's walk down the tree ([`pvs_with_stats`]).
+struct Walk<'a> {
+    tree: &'a BoxTree,
+    prepared: &'a [PreparedVo; MAX_VOS_PER_CELL],
+    view: &'a crate::runtime::frame::CellView,
+    /// The VO that last hid something ([`test`]).
+    last: usize,
+    /// Inner nodes that passed their test, with what they left for below.
+    stack: [(u32, (u16, u32)); STACK],
+    sp: usize,
+    st: PvsStats,
+}
+
+impl Walk<'_> {
+    /// Tests node `ni` with what its parent left, `vos`: culls it, keeps it whole, tests its
+    /// boxes (a leaf), or stacks it with what it leaves for its children. `out` is the bitmap
+    /// of the visible objects.
+    #[inline(always)]
+    fn visit(&mut self, out: &mut [u32], ni: u32, vos: (u16, u32)) {
+        let node = &self.tree.nodes[ni as usize];
+        self.st.nodes_tested += 1;
+        let Some(vos) = test(
+            self.prepared,
+            self.view,
+            vos,
+            &mut self.last,
+            &node.bounds,
+            node.min_top,
+        ) else {
+            self.st.subtrees_culled += 1;
+            return;
+        };
+        let range = node.start as usize..node.end as usize;
+        let kids = node.kids();
+        // Past the stack's room (the build's depth bound keeps it from happening), a subtree
+        // is kept whole, which is conservative.
+        if vos.0 == 0 || (!kids.is_empty() && self.sp == STACK) {
+            self.st.subtrees_kept += 1;
+            for &id in &self.tree.ids[range] {
+                keep(out, id);
+            }
+            return;
+        }
+        if kids.is_empty() {
+            for k in range {
+                self.st.boxes_tested += 1;
+                let bx = &self.tree.boxes[k];
+                if !hidden(self.prepared, self.view, vos, &mut self.last, bx) {
+                    keep(out, self.tree.ids[k]);
+                }
+            }
+            return;
+        }
+        self.stack[self.sp] = (ni, vos);
+        self.sp += 1;
+    }
+}
+
 /// The PVS of cell `id` with record `rec`: `out` is cleared, then holds the ascending indices
 /// of every object of `tree` that no VO of the cell hides.
 pub fn pvs(frame: &Frame, id: CellId, rec: &CellRecord, tree: &BoxTree, out: &mut Vec<u32>) {
@@ -658,50 +722,40 @@ pub fn pvs_with_stats(
     let n = tree.len;
     let words = n.div_ceil(32);
     out.resize(words, 0);
-    let keep = |out: &mut Vec<u32>, id: u32| out[(id >> 5) as usize] |= 1 << (id & 31);
     for &id in &tree.invalid {
         keep(out, id);
     }
 
-    let mut last = 0;
-    let mut stack = [(0u32, (0u16, 0u32)); STACK];
-    let mut sp = 0;
-    if !tree.nodes.is_empty() {
-        stack[0] = (0, (full, ALL_VO_PLANES));
-        sp = 1;
+    // The walk tests a node before it goes on the stack: a stacked node passed its test, with
+    // the VOs and half-planes it left for below, and popping it tests its children. A leaf's
+    // boxes are tested as soon as the leaf passes, so only inner nodes wait on the stack.
+    let mut walk = Walk {
+        tree,
+        prepared: &prepared,
+        view: &view,
+        last: 0,
+        stack: [(0u32, (0u16, 0u32)); STACK],
+        sp: 0,
+        st,
+    };
+    // The nodes to visit next, and what their parent left them: the root first.
+    let (mut next, mut vos): (&[u32], _) = match tree.nodes.is_empty() {
+        true => (&[], (0, 0)),
+        false => (&[0], (full, ALL_VO_PLANES)),
+    };
+    loop {
+        for &k in next {
+            walk.visit(out, k, vos);
+        }
+        if walk.sp == 0 {
+            break;
+        }
+        walk.sp -= 1;
+        let ni;
+        (ni, vos) = walk.stack[walk.sp];
+        next = tree.nodes[ni as usize].kids();
     }
-    while sp > 0 {
-        sp -= 1;
-        let (ni, vos) = stack[sp];
-        let node = &tree.nodes[ni as usize];
-        let range = node.start as usize..node.end as usize;
-        st.nodes_tested += 1;
-        let Some(vos) = test(&prepared, &view, vos, &mut last, &node.bounds, node.min_top) else {
-            st.subtrees_culled += 1;
-            continue;
-        };
-        let kids = node.kids();
-        if vos.0 == 0 || sp + kids.len() > STACK {
-            st.subtrees_kept += 1;
-            for &id in &tree.ids[range] {
-                keep(out, id);
-            }
-            continue;
-        }
-        if kids.is_empty() {
-            for k in range {
-                st.boxes_tested += 1;
-                if !hidden(&prepared, &view, vos, &mut last, &tree.boxes[k]) {
-                    keep(out, tree.ids[k]);
-                }
-            }
-            continue;
-        }
-        for &k in kids {
-            stack[sp] = (k, vos);
-            sp += 1;
-        }
-    }
+    let mut st = walk.st;
     for w in 0..words {
         let mut visible = out[w];
         while visible != 0 {
