@@ -15,7 +15,9 @@
 //!   arithmetic in the same order, only cheaper (each form's least value alone); a test checks
 //!   the two agree. Its group and box tests that skip the half-planes an enclosing group lies
 //!   strictly inside ([`PreparedVo::cover_group_planes`], [`PreparedVo::hides_probe_planes`])
-//!   answer as the full tests, bit for bit (monotone rounding; a test checks them too).
+//!   answer as the full tests, bit for bit (monotone rounding; a test checks them too), and so
+//!   does the probe of a box inside a box found apart from the cell, which is taken as apart
+//!   without a test ([`Probe::within`]).
 //!
 //! ## The 2D umbra of a segment from a convex cell
 //! Let the cell lie strictly left of the directed line `a -> b` (swap `a` and `b` otherwise; if
