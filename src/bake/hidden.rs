@@ -229,10 +229,7 @@ impl HiddenMap {
         // distance `dmin`.
         let open = |tile: &[Vec<f64>], mask: u8, r: [(usize, usize); 2], dmin: f64| {
             let mut live = 0u8;
-            let mut m = mask;
-            while m != 0 {
-                let s = m.trailing_zeros() as usize;
-                m &= m - 1;
+            for s in set_bits(mask) {
                 if !hidden_behind(&tile[s], r, dmin) {
                     live |= 1 << s;
                 }
@@ -315,20 +312,14 @@ impl HiddenMap {
                             }
                             let t = num / den;
                             if t >= 0.0 {
-                                let mut m = todo;
-                                while m != 0 {
-                                    let s = m.trailing_zeros() as usize;
-                                    m &= m - 1;
+                                for s in set_bits(todo) {
                                     if t < depth[s][k] {
                                         depth[s][k] = t;
                                     }
                                 }
                             }
                         }
-                        let mut m = todo;
-                        while m != 0 {
-                            let s = m.trailing_zeros() as usize;
-                            m &= m - 1;
+                        for s in set_bits(todo) {
                             for t in r0 / TILE..=r1 / TILE {
                                 tile[s][t] = depth[s][t * TILE..(t + 1) * TILE]
                                     .iter()
@@ -621,12 +612,29 @@ impl EdgeTwins {
     }
 }
 
+/// The indices of the set bits of `m`, lowest first (the slices of a mask,
+/// [`HiddenMap::build_slices`]).
+#[inline(always)]
+fn set_bits(mut m: u8) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        let s = (m != 0).then(|| m.trailing_zeros() as usize)?;
+        m &= m - 1;
+        Some(s)
+    })
+}
+
 /// The bit of an edge key ([`EdgeTwins::each_boundary_edge`]) that marks a wall's direction.
 pub const WALL_EDGE: u64 = 1 << 31;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The 100 m cell `[0, 100]²`, counter-clockwise.
+    fn cell_100() -> [DVec2; 4] {
+        let c = sq(0.0, 0.0, 100.0);
+        [c[0], c[1], c[2], c[3]]
+    }
 
     fn sq(x0: f64, y0: f64, s: f64) -> Vec<DVec2> {
         vec![
@@ -673,12 +681,7 @@ mod tests {
 
     #[test]
     fn a_wall_hides_what_is_behind_it_and_not_beside_it() {
-        let cell = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(100.0, 0.0),
-            DVec2::new(100.0, 100.0),
-            DVec2::new(0.0, 100.0),
-        ];
+        let cell = cell_100();
         // A 600 m long, 10 m deep row 30 m north of the cell.
         let row = vec![
             DVec2::new(-250.0, 130.0),
@@ -700,12 +703,7 @@ mod tests {
         // Pieces of blocks around a cell, some split in two (their shared edge is inside while
         // both pieces are in a slice, outside once one is left out), at random heights; three
         // slices keep the pieces at least 5, 15 and 25 m tall.
-        let cell = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(100.0, 0.0),
-            DVec2::new(100.0, 100.0),
-            DVec2::new(0.0, 100.0),
-        ];
+        let cell = cell_100();
         let mut seed = 11u64;
         let mut next = |n: u64| {
             seed = seed
@@ -846,12 +844,7 @@ mod tests {
         let e = boundary_edges([a.as_slice(), w.as_slice()].into_iter());
         assert_eq!(e.len(), 6);
         // And a row of walls hides what lies behind it.
-        let cell = [
-            DVec2::new(0.0, 0.0),
-            DVec2::new(100.0, 0.0),
-            DVec2::new(100.0, 100.0),
-            DVec2::new(0.0, 100.0),
-        ];
+        let cell = cell_100();
         let wall = [DVec2::new(-250.0, 130.0), DVec2::new(350.0, 130.0)];
         let e = boundary_edges([wall.as_slice()].into_iter());
         let map = HiddenMap::build(&cell, &e, &MapParams::default());

@@ -739,9 +739,10 @@ pub fn pvs_with_stats(
         st,
     };
     // The nodes to visit next, and what their parent left them: the root first.
-    let (mut next, mut vos): (&[u32], _) = match tree.nodes.is_empty() {
-        true => (&[], (0, 0)),
-        false => (&[0], (full, ALL_VO_PLANES)),
+    let (mut next, mut vos): (&[u32], _) = if tree.nodes.is_empty() {
+        (&[], (0, 0))
+    } else {
+        (&[0], (full, ALL_VO_PLANES))
     };
     loop {
         for &k in next {
