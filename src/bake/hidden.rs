@@ -555,22 +555,69 @@ impl EdgeTwins {
         slices: &[Vec<u32>],
     ) -> (Vec<(DVec2, DVec2)>, Vec<u8>) {
         assert!(slices.len() <= 8, "at most 8 slices");
-        let mut all: Vec<(u64, u8, DVec2, DVec2)> = Vec::new();
+        // The union of the slices' blockers, ascending, each with the slices it is in (merged
+        // slice by slice: each list is ascending).
+        let mut union: Vec<(u32, u8)> = Vec::new();
         for (s, ids) in slices.iter().enumerate() {
-            self.each_boundary_edge(polys, ids, |key, u, v| all.push((key, s as u8, u, v)));
-        }
-        all.sort_unstable_by_key(|x| (x.0, x.1));
-        let mut edges: Vec<(DVec2, DVec2)> = Vec::with_capacity(all.len());
-        let mut member: Vec<u8> = Vec::with_capacity(all.len());
-        let mut last = None;
-        for (key, s, u, v) in all {
-            if last != Some(key) {
-                last = Some(key);
-                edges.push((u, v));
-                member.push(0);
+            debug_assert!(ids.windows(2).all(|w| w[0] < w[1]));
+            let bit = 1u8 << s;
+            let mut merged = Vec::with_capacity(union.len() + ids.len());
+            let (mut u, mut v) = (union.iter().peekable(), ids.iter().peekable());
+            loop {
+                let next = match (u.peek(), v.peek()) {
+                    (Some(&&(i, m)), Some(&&j)) if i == j => {
+                        (u.next(), v.next());
+                        (i, m | bit)
+                    }
+                    (Some(&&(i, m)), Some(&&j)) if i < j => {
+                        u.next();
+                        (i, m)
+                    }
+                    (_, Some(&&j)) => {
+                        v.next();
+                        (j, bit)
+                    }
+                    (Some(&&x), None) => {
+                        u.next();
+                        x
+                    }
+                    (None, None) => break,
+                };
+                merged.push(next);
             }
-            if let Some(m) = member.last_mut() {
-                *m |= 1 << s;
+            union = merged;
+        }
+        let slices_of = |t: u32| {
+            union
+                .binary_search_by_key(&t, |x| x.0)
+                .map_or(0, |j| union[j].1)
+        };
+        // An edge of a blocker is a boundary edge of each of its slices that holds none of its
+        // twins ([`Self::each_boundary_edge`]); a wall's two directions are boundary edges of
+        // all its slices. Blockers ascending, edges in order: the order of their keys.
+        let mut edges: Vec<(DVec2, DVec2)> = Vec::new();
+        let mut member: Vec<u8> = Vec::new();
+        for &(i, m) in &union {
+            let p = polys[i as usize].as_ref();
+            match p.len() {
+                0 | 1 => {}
+                2 => {
+                    edges.extend([(p[0], p[1]), (p[1], p[0])]);
+                    member.extend([m, m]);
+                }
+                n => {
+                    let e0 = self.first_edge[i as usize] as usize;
+                    for k in 0..n {
+                        let (t0, t1) = (self.twin_start[e0 + k], self.twin_start[e0 + k + 1]);
+                        let inside = self.twins[t0 as usize..t1 as usize]
+                            .iter()
+                            .fold(0u8, |acc, &t| acc | slices_of(t));
+                        if m & !inside != 0 {
+                            edges.push((p[k], p[(k + 1) % n]));
+                            member.push(m & !inside);
+                        }
+                    }
+                }
             }
         }
         (edges, member)
@@ -821,6 +868,69 @@ mod tests {
         // All of them: the outline of the 5 x 4 block and the walls' 4 directions.
         let all: Vec<u32> = (0..polys.len() as u32).collect();
         assert_eq!(twins.boundary_edges(&polys, &all).len(), 2 * (5 + 4) + 4);
+    }
+
+    /// The form of [`EdgeTwins::slice_edges`] that its merge replaced, kept as its oracle: each
+    /// slice's edges with their keys, sorted by key and slice, each key once with its slices.
+    fn slice_edges_by_sorting(
+        twins: &EdgeTwins,
+        polys: &[Vec<DVec2>],
+        slices: &[Vec<u32>],
+    ) -> (Vec<(DVec2, DVec2)>, Vec<u8>) {
+        let mut all: Vec<(u64, u8, DVec2, DVec2)> = Vec::new();
+        for (s, ids) in slices.iter().enumerate() {
+            twins.each_boundary_edge(polys, ids, |key, u, v| all.push((key, s as u8, u, v)));
+        }
+        all.sort_unstable_by_key(|x| (x.0, x.1));
+        let (mut edges, mut member) = (Vec::new(), Vec::<u8>::new());
+        let mut last = None;
+        for (key, s, u, v) in all {
+            if last != Some(key) {
+                last = Some(key);
+                edges.push((u, v));
+                member.push(0);
+            }
+            *member.last_mut().unwrap() |= 1 << s;
+        }
+        (edges, member)
+    }
+
+    #[test]
+    fn slice_edges_merged_are_the_sorted_ones_for_any_slices() {
+        // The grid of the test above, with walls and a duplicated square; up to 8 slices drawn
+        // independently (not nested, some empty).
+        let mut polys: Vec<Vec<DVec2>> = Vec::new();
+        for x in 0..5 {
+            for y in 0..4 {
+                polys.push(sq(x as f64, y as f64, 1.0));
+            }
+        }
+        polys.push(sq(2.0, 2.0, 1.0));
+        polys.push(vec![DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0)]);
+        polys.push(vec![DVec2::new(3.0, 3.0), DVec2::new(4.0, 3.0)]);
+        let twins = EdgeTwins::new(&polys);
+        let mut seed = 11u64;
+        let mut next = |n: u64| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) % n
+        };
+        let mut exposed_above = 0;
+        for _ in 0..200 {
+            let k = 1 + next(8) as usize;
+            let slices: Vec<Vec<u32>> = (0..k)
+                .map(|_| {
+                    let keep = next(4);
+                    (0..polys.len() as u32).filter(|_| next(4) < keep).collect()
+                })
+                .collect();
+            let got = twins.slice_edges(&polys, &slices);
+            assert_eq!(got, slice_edges_by_sorting(&twins, &polys, &slices));
+            assert!(got.1.iter().all(|&m| m != 0 && (m as u32) < 1 << k));
+            exposed_above += got.1.iter().filter(|&&m| m & 1 == 0).count();
+        }
+        assert!(exposed_above > 0, "some edge is not in the first slice");
     }
 
     #[test]
