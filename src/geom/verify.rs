@@ -910,17 +910,17 @@ impl<'a> Verifier<'a> {
                 let (ids, near, boxes) = self.near_cached(par, j, k, cache);
                 // Inside one blocker: the piece up to where the segment leaves it.
                 let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
-                let in_box = |i: u32, x: DVec2| {
-                    let (lo, hi) = self.bounds(i);
-                    lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y
-                };
                 // The blockers holding q, and (when there are any) those holding p, in the
-                // stretch's order.
+                // stretch's order (its boxes and polygons lie in that order too).
                 let holding = |x: DVec2| -> Vec<u32> {
-                    ids.iter()
-                        .copied()
-                        .filter(|&i| in_box(i, x) && inside(self.poly(i), x))
-                        .collect()
+                    let mut out = Vec::new();
+                    for (k, (lo, hi)) in boxes.iter().enumerate() {
+                        let in_box = lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y;
+                        if in_box && inside(near[k], x) {
+                            out.push(ids[k]);
+                        }
+                    }
+                    out
                 };
                 let at_q = holding(q);
                 let at_p = if at_q.is_empty() {
