@@ -218,6 +218,9 @@ struct NearCache<'a> {
     /// The blockers of `ids`, in the same order, and their boxes.
     polys: Vec<&'a [DVec2]>,
     boxes: Vec<(DVec2, DVec2)>,
+    /// The positions in `ids` of the blockers whose boxes meet the box of the stretch (grown
+    /// by [`ALONG_PAD_M`]), ascending: only these can hold a point of the stretch.
+    along: Vec<u32>,
     /// Scratch: `ids` keyed by distance, while they are put in order.
     keyed: Vec<(f64, u32)>,
 }
@@ -226,6 +229,10 @@ struct NearCache<'a> {
 pub const NEAREST_SORTED: usize = 48;
 /// How far ahead of the sweep the blockers near the segment are gathered at once, metres.
 pub const NEAR_AHEAD_M: f64 = 48.0;
+/// How far the box of a stretch is grown before the boxes that meet it are listed
+/// ([`NearCache::along`]), metres: far above the rounding of its float corners, so that every
+/// exact point of the stretch lies inside.
+pub const ALONG_PAD_M: f64 = 1e-3;
 
 /// A uniform grid of buckets over the blockers' boxes (bucket `k` holds
 /// `ids[start[k]..start[k + 1]]`; a box is listed in every bucket it meets).
@@ -424,7 +431,12 @@ type BuildKeyHasher = std::hash::BuildHasherDefault<KeyHasher>;
 /// cached certificate is used again).
 type Cert = (std::rc::Rc<[Cond]>, std::rc::Rc<[u32]>);
 /// The near blockers of a piece: their ids, outlines and boxes, in the same order.
-type Near<'c, 'a> = (&'c [u32], &'c [&'a [DVec2]], &'c [(DVec2, DVec2)]);
+type Near<'c, 'a> = (
+    &'c [u32],
+    &'c [&'a [DVec2]],
+    &'c [(DVec2, DVec2)],
+    &'c [u32],
+);
 
 /// Certificates (their conditions) by where they held: each is listed in the buckets of the
 /// bounding box of the piece it certified, grown by [`CACHE_REACH_M`].
@@ -725,10 +737,25 @@ impl<'a> Verifier<'a> {
             cache.polys.extend(ids.iter().map(|&i| self.poly(i)));
             cache.boxes.clear();
             cache.boxes.extend(ids.iter().map(|&i| self.bounds(i)));
+            // The stretch's points are `a + t d` for `t` in its span (`Param::at`), and `b` at
+            // its end: each coordinate monotone in `t`, so they lie in the box of its two ends
+            // (taken in floats, then grown far past their rounding).
+            let (t0, t1) = (j as f64 / END as f64, e.max(k) as f64 / END as f64);
+            let (u, v) = (par.a + par.d * t0, par.a + par.d * t1);
+            let (mut lo, mut hi) = (u.min(v), u.max(v));
+            if e.max(k) >= END {
+                (lo, hi) = (lo.min(par.b), hi.max(par.b));
+            }
+            let (lo, hi) = (lo - ALONG_PAD_M, hi + ALONG_PAD_M);
+            cache.along.clear();
+            cache.along.extend((0..ids.len() as u32).filter(|&k| {
+                let (bl, bh) = cache.boxes[k as usize];
+                bl.x <= hi.x && bh.x >= lo.x && bl.y <= hi.y && bh.y >= lo.y
+            }));
             cache.ids = ids;
             cache.span = (j, e.max(k));
         }
-        (&cache.ids, &cache.polys, &cache.boxes)
+        (&cache.ids, &cache.polys, &cache.boxes, &cache.along)
     }
 
     /// The certified hidden sub-intervals of `[a, b]`, in order, merged where they touch.
@@ -782,6 +809,7 @@ impl<'a> Verifier<'a> {
             ids: Vec::new(),
             polys: Vec::new(),
             boxes: Vec::new(),
+            along: Vec::new(),
             keyed: Vec::new(),
         };
         // The last point that could not be certified, after which the sweep stepped on.
@@ -907,14 +935,16 @@ impl<'a> Verifier<'a> {
         let ((conds, used), fresh): (Cert, bool) = match cached {
             Some((c, _)) => (c, false),
             None => {
-                let (ids, near, boxes) = self.near_cached(par, j, k, cache);
+                let (ids, near, boxes, along) = self.near_cached(par, j, k, cache);
                 // Inside one blocker: the piece up to where the segment leaves it.
                 let inside = |b: &[DVec2], x| point_in_convex(b, x) != Containment::Outside;
                 // The blockers holding q, and (when there are any) those holding p, in the
                 // stretch's order (its boxes and polygons lie in that order too).
                 let holding = |x: DVec2| -> Vec<u32> {
                     let mut out = Vec::new();
-                    for (k, (lo, hi)) in boxes.iter().enumerate() {
+                    for &k in along {
+                        let k = k as usize;
+                        let (lo, hi) = boxes[k];
                         let in_box = lo.x <= x.x && x.x <= hi.x && lo.y <= x.y && x.y <= hi.y;
                         if in_box && inside(near[k], x) {
                             out.push(ids[k]);
