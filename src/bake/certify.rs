@@ -123,16 +123,16 @@ impl<'a> Certifier<'a> {
     /// For each blocker that may meet a segment from the cell to `a`–`b` (its box meets the box
     /// of both), the highest level at which it supports a VO on `a`–`b` by rule 2 with the
     /// tighter bounds for that segment ([`Support::supports_beside`]), when it supports one.
-    /// Keyed by index into `blockers`, ascending (a `BTreeMap`: the verifiers built from it list
+    /// As `(index into blockers, level)`, ascending by index (the verifiers built from it list
     /// their blockers in a fixed order).
-    fn levels_beside(&self, a: DVec2, b: DVec2) -> std::collections::BTreeMap<u32, u8> {
+    fn levels_beside(&self, a: DVec2, b: DVec2) -> Vec<(u32, u8)> {
         let (e0, e1, g) = self.heights;
         let dn = d_near(self.cell, &[a, b]);
         let (lo, hi) = self
             .cell
             .iter()
             .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
-        let mut out = std::collections::BTreeMap::new();
+        let mut out = Vec::new();
         for (i, &(p, s)) in self.blockers.iter().enumerate() {
             let (pl, ph) = self.index.bounds(i as u32);
             if !(pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y) {
@@ -158,7 +158,7 @@ impl<'a> Certifier<'a> {
                 top_at(d_near(p, &[a, b]))
             };
             if let Some(l) = top {
-                out.insert(i as u32, l);
+                out.push((i as u32, l));
             }
         }
         out
@@ -267,7 +267,10 @@ impl<'a> Certifier<'a> {
                     let tops = self.levels_beside(qa, qb);
                     let top_of = |used: &[u32]| {
                         used.iter()
-                            .map(|&i| tops.get(&i).copied().unwrap_or(0))
+                            .map(|&i| {
+                                tops.binary_search_by_key(&i, |t| t.0)
+                                    .map_or(0, |k| tops[k].1)
+                            })
                             .min()
                             .unwrap_or(0)
                     };
@@ -276,8 +279,8 @@ impl<'a> Certifier<'a> {
                         let next = q.level + 1;
                         let ids: Vec<u32> = tops
                             .iter()
-                            .filter(|(_, &l)| l >= next)
-                            .map(|(&i, _)| i)
+                            .filter(|&&(_, l)| l >= next)
+                            .map(|&(i, _)| i)
                             .collect();
                         stats.checks += 1;
                         let v = Verifier::subset(self.cell, self.index, &ids)
