@@ -444,8 +444,15 @@ type Near<'c, 'a> = (
 struct CertCache {
     /// Each certificate's conditions and the blockers (verifier indices) its chords lie in.
     certs: Vec<Cert>,
-    buckets: std::collections::HashMap<(i64, i64), Vec<u32>, BuildKeyHasher>,
+    /// Per bucket, its newest entry in `listed`.
+    buckets: std::collections::HashMap<(i64, i64), u32, BuildKeyHasher>,
+    /// The buckets' lists, all in one: a certificate, and the entry listed before it in the
+    /// same bucket ([`NO_ENTRY`]: none). One buffer, not a vector per bucket.
+    listed: Vec<(u32, u32)>,
 }
+
+/// The end of a bucket's list in [`CertCache::listed`].
+const NO_ENTRY: u32 = u32::MAX;
 
 /// A new certificate is first sought among this many blockers nearest the point.
 pub const NEAREST_FIRST: usize = 12;
@@ -494,17 +501,14 @@ impl CertCache {
         if n <= 64 {
             for x in lo.0..=hi.0 {
                 for y in lo.1..=hi.1 {
-                    self.buckets.entry((x, y)).or_default().push(id);
+                    self.list((x, y), id);
                 }
             }
         } else {
             let steps = (p0.distance(p1) / CACHE_BUCKET_M).ceil().max(1.0) as usize;
             for k in 0..=steps.min(64) {
                 let q = p0 + (p1 - p0) * (k as f64 / steps.min(64) as f64);
-                let v = self.buckets.entry(Self::key(q)).or_default();
-                if v.last() != Some(&id) {
-                    v.push(id);
-                }
+                self.list(Self::key(q), id);
             }
         }
     }
@@ -512,15 +516,29 @@ impl CertCache {
     /// The cached certificates that hold at every point of `pts` (newest first), if any.
     /// Of the newest [`CACHE_TRIES`] certificates listed where `q` is, one that holds at `q`
     /// and `p` and reaches furthest towards `b` ([`reach`]), with that reach.
+    /// Lists certificate `id` in bucket `key`, newest, unless it is the newest there already.
+    fn list(&mut self, key: (i64, i64), id: u32) {
+        let at = self.listed.len() as u32;
+        let head = self.buckets.entry(key).or_insert(NO_ENTRY);
+        if *head != NO_ENTRY && self.listed[*head as usize].0 == id {
+            return;
+        }
+        self.listed.push((id, *head));
+        *head = at;
+    }
+
     fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(&Cert, f64)> {
-        let ids = self.buckets.get(&Self::key(q))?;
-        ids.iter()
-            .rev()
-            .take(CACHE_TRIES)
-            .map(|&i| &self.certs[i as usize])
-            .filter(|c| [q, p].iter().all(|&x| c.0.iter().all(|k| k.holds(x))))
-            .map(|c| (c, reach(&c.0, q, b)))
-            .max_by(|x, y| x.1.total_cmp(&y.1))
+        let mut at = *self.buckets.get(&Self::key(q))?;
+        std::iter::from_fn(|| {
+            let &(id, prev) = self.listed.get(at as usize)?;
+            at = prev;
+            Some(id)
+        })
+        .take(CACHE_TRIES)
+        .map(|i| &self.certs[i as usize])
+        .filter(|c| [q, p].iter().all(|&x| c.0.iter().all(|k| k.holds(x))))
+        .map(|c| (c, reach(&c.0, q, b)))
+        .max_by(|x, y| x.1.total_cmp(&y.1))
     }
 }
 
