@@ -566,7 +566,8 @@ impl EdgeTwins {
             loop {
                 let next = match (u.peek(), v.peek()) {
                     (Some(&&(i, m)), Some(&&j)) if i == j => {
-                        (u.next(), v.next());
+                        u.next();
+                        v.next();
                         (i, m | bit)
                     }
                     (Some(&&(i, m)), Some(&&j)) if i < j => {
