@@ -839,6 +839,9 @@ impl<'s> Plan<'s> {
 const TRIM_MARGIN_M: f64 = 0.05;
 /// Share of the trimmed length kept on either side beyond it.
 const TRIM_EXTRA: f64 = 0.25;
+/// Relative bound, far above the rounding of a crossing's float value, under which [`trim`]
+/// skips a box that cannot move either end.
+const TRIM_SKIP_EPS: f64 = 1e-9;
 
 /// The part of the segment `a`–`b` that segments from the rectangle `cell` to the footprints of
 /// `boxes` (lying beyond its line) cross, with [`TRIM_MARGIN_M`] on each side and its ends
@@ -865,25 +868,16 @@ fn trim<'b>(
     if cs.iter().any(|&(_, s)| !(s < 0.0)) {
         return None;
     }
-    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-    for bx in boxes {
-        for w in [
+    let boxes = boxes.map(|bx| {
+        [
             DVec2::new(bx[0], bx[1]),
             DVec2::new(bx[3], bx[1]),
             DVec2::new(bx[3], bx[4]),
             DVec2::new(bx[0], bx[4]),
-        ] {
-            let (tw, sw) = (u.dot(w - a), n.dot(w - a));
-            if !(sw > 0.0) {
-                return None;
-            }
-            for &(tc, sc) in &cs {
-                let t = tc + (tw - tc) * (-sc) / (sw - sc);
-                t0 = t0.min(t);
-                t1 = t1.max(t);
-            }
-        }
-    }
+        ]
+        .map(|w| (u.dot(w - a), n.dot(w - a)))
+    });
+    let (t0, t1) = crossing_span(&cs, boxes)?;
     let extra = TRIM_EXTRA * (t1 - t0) + TRIM_MARGIN_M;
     let (t0, t1) = ((t0 - extra).max(0.0), (t1 + extra).min(len));
     if !(t0 < t1) {
@@ -902,6 +896,48 @@ fn trim<'b>(
         }
     };
     Some((out(t0, -1.0), out(t1, 1.0)))
+}
+
+/// The least and greatest `t` where segments from the cell's corners `cs` to the corners of
+/// each box (all as `(t, s)`: along the line and beyond it, the cell at `s < 0`) cross the line
+/// `s = 0`; `None` when a box corner is not strictly beyond it.
+fn crossing_span(
+    cs: &[(f64, f64)],
+    boxes: impl Iterator<Item = [(f64, f64); 4]>,
+) -> Option<(f64, f64)> {
+    let (tc_lo, tc_hi) = cs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &(tc, _)| {
+            (l.min(tc), h.max(tc))
+        });
+    let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for ws in boxes {
+        if ws.iter().any(|&(_, sw)| !(sw > 0.0)) {
+            return None;
+        }
+        // Each crossing lies between `tc` and `tw` (`-sc / (sw - sc)` is in (0, 1)), and its
+        // float value within a few units in the last place of that: a box whose corners' `tw`
+        // and the cell's `tc` all lie inside `[t0, t1]` by [`TRIM_SKIP_EPS`] (relative, far
+        // above that rounding) moves neither end, so its crossings are not computed (the same
+        // ends, bit for bit).
+        let (tw_lo, tw_hi) = ws
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &(tw, _)| {
+                (l.min(tw), h.max(tw))
+            });
+        let eps = TRIM_SKIP_EPS * (1.0 + t0.abs().max(t1.abs()));
+        if tw_lo.min(tc_lo) > t0 + eps && tw_hi.max(tc_hi) < t1 - eps {
+            continue;
+        }
+        for (tw, sw) in ws {
+            for &(tc, sc) in cs {
+                let t = tc + (tw - tc) * (-sc) / (sw - sc);
+                t0 = t0.min(t);
+                t1 = t1.max(t);
+            }
+        }
+    }
+    Some((t0, t1))
 }
 
 /// Bakes `cells` in parallel on the current rayon pool; `progress(done)` is called as cells
@@ -937,4 +973,71 @@ pub fn records(frame: &Frame, baked: &[CellBake]) -> Vec<CellRecord> {
 /// The store's bytes for a bake: [`records`], encoded.
 pub fn encode(frame: &Frame, baked: &[CellBake]) -> Result<Vec<u8>, FormatError> {
     encode_store(frame, &records(frame, baked))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`crossing_span`] without its skip: every crossing computed.
+    fn crossing_span_plain(cs: &[(f64, f64)], boxes: &[[(f64, f64); 4]]) -> Option<(f64, f64)> {
+        let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
+        for ws in boxes {
+            for &(tw, sw) in ws {
+                if !(sw > 0.0) {
+                    return None;
+                }
+                for &(tc, sc) in cs {
+                    let t = tc + (tw - tc) * (-sc) / (sw - sc);
+                    t0 = t0.min(t);
+                    t1 = t1.max(t);
+                }
+            }
+        }
+        Some((t0, t1))
+    }
+
+    #[test]
+    fn skipped_boxes_move_no_end_of_the_crossing_span() {
+        let mut seed = 5u64;
+        let mut next = |lo: f64, hi: f64| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + (hi - lo) * ((seed >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        let mut inside = 0;
+        for round in 0..300 {
+            let x = next(-60.0, 900.0);
+            let cs = [
+                (x, -130.0),
+                (x + 100.0, -130.0),
+                (x + 100.0, -30.0),
+                (x, -30.0),
+            ];
+            let boxes: Vec<[(f64, f64); 4]> = (0..40)
+                .map(|_| {
+                    let (t, s) = (next(-200.0, 1200.0), next(0.5, 300.0));
+                    let (w, d) = (next(0.5, 40.0), next(0.5, 40.0));
+                    // Now and then a corner on the line or the cell's side: refused.
+                    let s = if round % 50 == 0 { s - 100.0 } else { s };
+                    [(t, s), (t + w, s), (t + w, s + d), (t, s + d)]
+                })
+                .collect();
+            let got = crossing_span(&cs, boxes.iter().copied());
+            let want = crossing_span_plain(&cs, &boxes);
+            assert_eq!(
+                got.map(|(a, b)| (a.to_bits(), b.to_bits())),
+                want.map(|(a, b)| (a.to_bits(), b.to_bits())),
+                "round {round}"
+            );
+            if let Some((t0, t1)) = got {
+                inside += boxes
+                    .iter()
+                    .filter(|ws| ws.iter().all(|&(tw, _)| tw > t0 && tw < t1))
+                    .count();
+            }
+        }
+        assert!(inside > 1000, "boxes inside the span: {inside}");
+    }
 }
