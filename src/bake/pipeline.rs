@@ -1017,7 +1017,14 @@ mod tests {
             ];
             let boxes: Vec<[(f64, f64); 4]> = (0..40)
                 .map(|_| {
-                    let (t, s) = (next(-200.0, 1200.0), next(0.5, 300.0));
+                    // Half of them close to the line, where a crossing lies near the box's
+                    // own `t`: the ends then move by small steps, which a wrong skip misses.
+                    let s = if next(0.0, 1.0) < 0.5 {
+                        next(0.01, 2.0)
+                    } else {
+                        next(0.5, 300.0)
+                    };
+                    let t = next(-200.0, 1200.0);
                     let (w, d) = (next(0.5, 40.0), next(0.5, 40.0));
                     // Now and then a corner on the line or the cell's side: refused.
                     let s = if round % 50 == 0 { s - 100.0 } else { s };
