@@ -133,7 +133,7 @@ impl Frame {
 
     /// VO top of level `level` for a cell whose top eye is at `e1`.
     pub fn vo_top(&self, e1: f64, level: u8) -> f64 {
-        e1 + self.h0 * (self.h_ratio.powi(level as i32) - 1.0)
+        e1 + self.h0 * (pow_u8(self.h_ratio, level) - 1.0)
     }
 
     /// Local coordinate of grid index `k` along an axis whose cell centre is `c`.
@@ -151,6 +151,24 @@ impl Frame {
             g,
             h: self.vo_top(g + self.eye_hi, q.level),
         })
+    }
+}
+
+/// `r^k` by binary powering in plain IEEE operations: the bits `powi` gives when it runs
+/// (compiler-rt's `__powidf2`, the same steps), in every build. `powi` itself may be folded
+/// at compile time with another rounding where inlining makes `k` a constant, so a
+/// whole-program build gave other VO tops, and other stores.
+fn pow_u8(mut r: f64, mut k: u8) -> f64 {
+    let mut acc = 1.0;
+    loop {
+        if k & 1 == 1 {
+            acc *= r;
+        }
+        k >>= 1;
+        if k == 0 {
+            return acc;
+        }
+        r *= r;
     }
 }
 
@@ -172,6 +190,17 @@ mod tests {
         assert_eq!(QVo::from_bytes(q.to_bytes()), q);
         for b in [[0u8; 5], [0xff; 5], [0x12, 0x34, 0x56, 0x78, 0x9a]] {
             assert_eq!(QVo::from_bytes(b).to_bytes(), b);
+        }
+    }
+
+    #[test]
+    fn vo_tops_power_as_powi_does_when_it_runs() {
+        // `black_box` keeps `powi` from being folded here: this is the run-time `__powidf2`.
+        for r in [1.0, 1.0625, 1.1, 1.25, 1.3333333333333333, 2.0, 0.9] {
+            for k in 0..=u8::MAX {
+                let want = std::hint::black_box(r).powi(std::hint::black_box(k as i32));
+                assert_eq!(pow_u8(r, k).to_bits(), want.to_bits(), "{r}^{k}");
+            }
         }
     }
 }
