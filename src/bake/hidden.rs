@@ -17,6 +17,7 @@
 //! (`super::certify`). Sampling can miss a narrow view (a gap thinner than a bin, an eye
 //! position between samples); the verifier then cuts the candidate there.
 
+use crate::geom::{ceil, floor};
 use glam::DVec2;
 
 pub use crate::geom::pseudo_angle;
@@ -206,9 +207,9 @@ impl HiddenMap {
         // `pb` (less than a half-turn), as at most two ranges.
         let spans = |pa: f64, pb: f64| -> [(usize, usize); 2] {
             const NONE: (usize, usize) = (1, 0);
-            let first = |a: f64| ((a * scale - 0.5).ceil().max(0.0)) as usize;
+            let first = |a: f64| (ceil(a * scale - 0.5).max(0.0)) as usize;
             let last = |b: f64| {
-                let l = (b * scale - 0.5).floor();
+                let l = floor(b * scale - 0.5);
                 (l >= 0.0).then(|| (l as usize).min(bins - 1))
             };
             if pa <= pb {
@@ -386,7 +387,7 @@ impl Groups {
 
     fn new(edges: &[(DVec2, DVec2)], member: &[u8], centre: DVec2) -> Groups {
         let key = |p: DVec2| {
-            let k = ((p - centre) / Self::SIZE_M).floor();
+            let k = ((p - centre) / Self::SIZE_M).map(floor);
             (k.x as i64, k.y as i64)
         };
         let mut keyed: Vec<((i64, i64), u32)> = edges

@@ -304,7 +304,7 @@ impl Grid {
     }
 
     fn range(&self, lo: DVec2, hi: DVec2) -> (usize, usize, usize, usize) {
-        let ix = |v: f64, n: usize| (((v / self.size).floor().max(0.0)) as usize).min(n - 1);
+        let ix = |v: f64, n: usize| ((super::floor(v / self.size).max(0.0)) as usize).min(n - 1);
         let (a, b) = (lo - self.lo, hi - self.lo);
         (
             ix(a.x, self.nx),
@@ -486,8 +486,8 @@ pub const CACHE_REACH_M: f64 = 4.0;
 impl CertCache {
     fn key(p: DVec2) -> (i64, i64) {
         (
-            (p.x / CACHE_BUCKET_M).floor() as i64,
-            (p.y / CACHE_BUCKET_M).floor() as i64,
+            super::floor(p.x / CACHE_BUCKET_M) as i64,
+            super::floor(p.y / CACHE_BUCKET_M) as i64,
         )
     }
 

@@ -196,7 +196,7 @@ mod tests {
     #[test]
     fn vo_tops_power_as_powi_does_when_it_runs() {
         // `black_box` keeps `powi` from being folded here: this is the run-time `__powidf2`.
-        for r in [1.0, 1.0625, 1.1, 1.25, 1.3333333333333333, 2.0, 0.9] {
+        for r in [1.0f64, 1.0625, 1.1, 1.25, 1.3333333333333333, 2.0, 0.9] {
             for k in 0..=u8::MAX {
                 let want = std::hint::black_box(r).powi(std::hint::black_box(k as i32));
                 assert_eq!(pow_u8(r, k).to_bits(), want.to_bits(), "{r}^{k}");
