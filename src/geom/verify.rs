@@ -398,6 +398,8 @@ pub struct Verifier<'a> {
     min_step_m: f64,
     /// Scratch of [`Self::near`]: a stamp per blocker of the index, and the last stamp used.
     seen: std::cell::RefCell<(Vec<u32>, u32)>,
+    /// Scratch of [`Self::extend`]: the conditions of the certificate at hand.
+    conds: std::cell::RefCell<Vec<Cond>>,
     /// Scratch buffers of [`Self::chain`], kept between its calls (hundreds of thousands per
     /// cell) so that they are not allocated each time; each call clears what it uses.
     scratch: std::cell::RefCell<ChainScratch>,
@@ -427,9 +429,9 @@ impl std::hash::Hasher for KeyHasher {
 
 type BuildKeyHasher = std::hash::BuildHasherDefault<KeyHasher>;
 
-/// A certificate's conditions and the blockers its chords lie in (shared, not copied, when a
-/// cached certificate is used again).
-type Cert = (std::rc::Rc<[Cond]>, std::rc::Rc<[u32]>);
+/// A cached certificate: where its conditions lie in [`CertCache::conds`], and the blockers its
+/// chords lie in (shared, not copied, when it is used again).
+type Cert = (u32, u32, std::rc::Rc<[u32]>);
 /// The near blockers of a piece: their ids, outlines and boxes, in the same order.
 type Near<'c, 'a> = (
     &'c [u32],
@@ -442,8 +444,12 @@ type Near<'c, 'a> = (
 /// bounding box of the piece it certified, grown by [`CACHE_REACH_M`].
 #[derive(Default)]
 struct CertCache {
-    /// Each certificate's conditions and the blockers (verifier indices) its chords lie in.
+    /// Each certificate's conditions (a range of `conds`) and the blockers (verifier indices)
+    /// its chords lie in.
     certs: Vec<Cert>,
+    /// The conditions of all the certificates, one after another: one buffer, not an
+    /// allocation per certificate.
+    conds: Vec<Cond>,
     /// Per bucket, its newest entry in `listed`.
     buckets: std::collections::HashMap<(i64, i64), u32, BuildKeyHasher>,
     /// The buckets' lists, all in one: a certificate, and the entry listed before it in the
@@ -491,9 +497,13 @@ impl CertCache {
         )
     }
 
-    fn add(&mut self, cert: Cert, p0: DVec2, p1: DVec2) {
+    /// Caches the certificate of conditions `conds` and blockers `used`, which held from `p0`
+    /// to `p1`.
+    fn add(&mut self, conds: &[Cond], used: std::rc::Rc<[u32]>, p0: DVec2, p1: DVec2) {
         let id = self.certs.len() as u32;
-        self.certs.push(cert);
+        let start = self.conds.len() as u32;
+        self.conds.extend_from_slice(conds);
+        self.certs.push((start, self.conds.len() as u32, used));
         let r = DVec2::splat(CACHE_REACH_M);
         let (lo, hi) = (Self::key(p0.min(p1) - r), Self::key(p0.max(p1) + r));
         // Long pieces are listed along their length only (at most 64 buckets).
@@ -513,9 +523,6 @@ impl CertCache {
         }
     }
 
-    /// The cached certificates that hold at every point of `pts` (newest first), if any.
-    /// Of the newest [`CACHE_TRIES`] certificates listed where `q` is, one that holds at `q`
-    /// and `p` and reaches furthest towards `b` ([`reach`]), with that reach.
     /// Lists certificate `id` in bucket `key`, newest, unless it is the newest there already.
     fn list(&mut self, key: (i64, i64), id: u32) {
         let at = self.listed.len() as u32;
@@ -527,7 +534,15 @@ impl CertCache {
         *head = at;
     }
 
-    fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(&Cert, f64)> {
+    /// The conditions of certificate `id`.
+    fn conds_of(&self, id: u32) -> &[Cond] {
+        let (s, e, _) = self.certs[id as usize];
+        &self.conds[s as usize..e as usize]
+    }
+
+    /// Of the newest [`CACHE_TRIES`] certificates listed where `q` is, one that holds at `q`
+    /// and `p` and reaches furthest towards `b` ([`reach`]), with that reach, if any.
+    fn find(&self, q: DVec2, p: DVec2, b: DVec2) -> Option<(u32, f64)> {
         let mut at = *self.buckets.get(&Self::key(q))?;
         std::iter::from_fn(|| {
             let &(id, prev) = self.listed.get(at as usize)?;
@@ -535,9 +550,11 @@ impl CertCache {
             Some(id)
         })
         .take(CACHE_TRIES)
-        .map(|i| &self.certs[i as usize])
-        .filter(|c| [q, p].iter().all(|&x| c.0.iter().all(|k| k.holds(x))))
-        .map(|c| (c, reach(&c.0, q, b)))
+        .filter(|&i| {
+            let c = self.conds_of(i);
+            [q, p].iter().all(|&x| c.iter().all(|k| k.holds(x)))
+        })
+        .map(|i| (i, reach(self.conds_of(i), q, b)))
         .max_by(|x, y| x.1.total_cmp(&y.1))
     }
 }
@@ -621,6 +638,7 @@ impl<'a> Verifier<'a> {
             max_step_m: MAX_STEP_M,
             min_step_m: MIN_PIECE_M,
             seen: Default::default(),
+            conds: Default::default(),
             scratch: Default::default(),
         }
     }
@@ -943,15 +961,19 @@ impl<'a> Verifier<'a> {
     ) -> Option<(u64, DVec2, std::rc::Rc<[u32]>)> {
         // A certificate found before that holds here (it proves the piece as well as a new one).
         let remaining = q.distance(par.b);
-        let cached = self
-            .cache
-            .borrow()
-            .find(q, p, par.b)
-            .map(|(c, t)| (c.clone(), t));
+        let cached = self.cache.borrow().find(q, p, par.b);
         // A cached certificate that reaches only a little way: a new one may reach further.
         let cached = cached.filter(|(_, t)| t * remaining >= CACHE_ENOUGH_M);
-        let ((conds, used), fresh): (Cert, bool) = match cached {
-            Some((c, _)) => (c, false),
+        // The certificate's conditions: a cached one's copied into a buffer reused from call to
+        // call, a new one's as found.
+        let mut conds_buf = self.conds.borrow_mut();
+        conds_buf.clear();
+        let (used, fresh): (std::rc::Rc<[u32]>, bool) = match cached {
+            Some((id, _)) => {
+                let c = self.cache.borrow();
+                conds_buf.extend_from_slice(c.conds_of(id));
+                (c.certs[id as usize].2.clone(), false)
+            }
             None => {
                 let (ids, near, boxes, along) = self.near_cached(par, j, k, cache);
                 // Inside one blocker: the piece up to where the segment leaves it.
@@ -992,7 +1014,8 @@ impl<'a> Verifier<'a> {
                             strict: false,
                         })
                         .collect::<Vec<Cond>>();
-                    ((conds.into(), [i].into()), true)
+                    *conds_buf = conds;
+                    ([i].into(), true)
                 } else if let Some((i, j)) = self.across_two(&at_q, &at_p, q, p) {
                     // From one blocker into one it meets: the piece is covered, and the sweep
                     // goes on from p (inside the second).
@@ -1048,16 +1071,18 @@ impl<'a> Verifier<'a> {
                     // from its start): they subtend the widest angles, and a few of them often
                     // cover the cell.
                     let (conds, used) = search(near)?;
-                    ((conds.into(), used.into()), true)
+                    *conds_buf = conds;
+                    (used.into(), true)
                 }
             }
         };
         // Where the first condition stops holding, estimated from its affine values at q and b.
-        let t = reach(&conds, q, par.b);
+        let conds: &[Cond] = &conds_buf;
+        let t = reach(conds, q, par.b);
         let est = j + ((END - j) as f64 * t) as u64;
         let (e, pe) = self.furthest(par, k, p, est, &|x| conds.iter().all(|c| c.holds(x)));
         if fresh {
-            self.cache.borrow_mut().add((conds, used.clone()), q, pe);
+            self.cache.borrow_mut().add(conds, used.clone(), q, pe);
         }
         Some((e, pe, used))
     }
