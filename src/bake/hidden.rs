@@ -837,10 +837,9 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn edge_twins_give_the_edges_sorting_gives_for_every_subset() {
-        // A grid of unit squares (every inner edge shared), walls along some of their edges, a
-        // duplicated square: every subset drawn gives the sorting form's edges, in its order.
+    /// A 5 x 4 grid of unit squares (every inner edge shared), a duplicated square, and two
+    /// walls along edges of the squares.
+    fn grid_with_walls() -> Vec<Vec<DVec2>> {
         let mut polys: Vec<Vec<DVec2>> = Vec::new();
         for x in 0..5 {
             for y in 0..4 {
@@ -850,6 +849,14 @@ mod tests {
         polys.push(sq(2.0, 2.0, 1.0));
         polys.push(vec![DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0)]);
         polys.push(vec![DVec2::new(3.0, 3.0), DVec2::new(4.0, 3.0)]);
+        polys
+    }
+
+    #[test]
+    fn edge_twins_give_the_edges_sorting_gives_for_every_subset() {
+        // A grid of unit squares (every inner edge shared), walls along some of their edges, a
+        // duplicated square: every subset drawn gives the sorting form's edges, in its order.
+        let polys = grid_with_walls();
         let twins = EdgeTwins::new(&polys);
         let mut seed = 7u64;
         for _ in 0..300 {
@@ -901,15 +908,7 @@ mod tests {
     fn slice_edges_merged_are_the_sorted_ones_for_any_slices() {
         // The grid of the test above, with walls and a duplicated square; up to 8 slices drawn
         // independently (not nested, some empty).
-        let mut polys: Vec<Vec<DVec2>> = Vec::new();
-        for x in 0..5 {
-            for y in 0..4 {
-                polys.push(sq(x as f64, y as f64, 1.0));
-            }
-        }
-        polys.push(sq(2.0, 2.0, 1.0));
-        polys.push(vec![DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0)]);
-        polys.push(vec![DVec2::new(3.0, 3.0), DVec2::new(4.0, 3.0)]);
+        let polys = grid_with_walls();
         let twins = EdgeTwins::new(&polys);
         let mut seed = 11u64;
         let mut next = |n: u64| {
