@@ -608,10 +608,9 @@ impl EdgeTwins {
                     member.extend([m, m]);
                 }
                 n => {
-                    let e0 = self.first_edge[i as usize] as usize;
                     for k in 0..n {
-                        let (t0, t1) = (self.twin_start[e0 + k], self.twin_start[e0 + k + 1]);
-                        let inside = self.twins[t0 as usize..t1 as usize]
+                        let inside = self
+                            .twins_of(i, k)
                             .iter()
                             .fold(0u8, |acc, &t| acc | slices_of(t));
                         if m & !inside != 0 {
@@ -623,6 +622,12 @@ impl EdgeTwins {
             }
         }
         (edges, member)
+    }
+
+    /// The blockers holding the reverse of edge `k` of blocker `i` (a polygon).
+    fn twins_of(&self, i: u32, k: usize) -> &[u32] {
+        let e = self.first_edge[i as usize] as usize + k;
+        &self.twins[self.twin_start[e] as usize..self.twin_start[e + 1] as usize]
     }
 
     /// [`Self::boundary_edges`], each edge given to `f` with a key that names it among all the
@@ -645,10 +650,9 @@ impl EdgeTwins {
                     f(key | WALL_EDGE | 1, p[1], p[0]);
                 }
                 n => {
-                    let e0 = self.first_edge[i as usize] as usize;
                     for k in 0..n {
-                        let (t0, t1) = (self.twin_start[e0 + k], self.twin_start[e0 + k + 1]);
-                        let inside = self.twins[t0 as usize..t1 as usize]
+                        let inside = self
+                            .twins_of(i, k)
                             .iter()
                             .any(|t| ids.binary_search(t).is_ok());
                         if !inside {
