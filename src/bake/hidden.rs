@@ -757,13 +757,7 @@ mod tests {
         // both pieces are in a slice, outside once one is left out), at random heights; three
         // slices keep the pieces at least 5, 15 and 25 m tall.
         let cell = cell_100();
-        let mut seed = 11u64;
-        let mut next = |n: u64| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) % n
-        };
+        let mut next = lcg(11);
         let mut polys: Vec<Vec<DVec2>> = Vec::new();
         let mut heights: Vec<f64> = Vec::new();
         for bx in -6..8 {
@@ -841,6 +835,16 @@ mod tests {
             .collect()
     }
 
+    /// A seeded generator of integers below `n`.
+    fn lcg(mut seed: u64) -> impl FnMut(u64) -> u64 {
+        move |n| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) % n
+        }
+    }
+
     /// A 5 x 4 grid of unit squares (every inner edge shared), a duplicated square, and two
     /// walls along edges of the squares.
     fn grid_with_walls() -> Vec<Vec<DVec2>> {
@@ -914,13 +918,7 @@ mod tests {
         // independently (not nested, some empty).
         let polys = grid_with_walls();
         let twins = EdgeTwins::new(&polys);
-        let mut seed = 11u64;
-        let mut next = |n: u64| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) % n
-        };
+        let mut next = lcg(11);
         let mut exposed_above = 0;
         for _ in 0..200 {
             let k = 1 + next(8) as usize;
