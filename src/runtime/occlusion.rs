@@ -17,7 +17,9 @@
 //!   strictly inside ([`PreparedVo::cover_group_planes`], [`PreparedVo::hides_probe_planes`])
 //!   answer as the full tests, bit for bit (monotone rounding; a test checks them too), and so
 //!   does the probe of a box inside a box found apart from the cell, which is taken as apart
-//!   without a test ([`Probe::within`]).
+//!   without a test ([`Probe::within`]). The culler's leaves test up to [`LANES`] boxes at
+//!   once ([`Lanes`], [`PreparedVo::hides_lanes`]), with the same arithmetic lane by lane and
+//!   the same answers (a test checks them against the box tests).
 //!
 //! ## The 2D umbra of a segment from a convex cell
 //! Let the cell lie strictly left of the directed line `a -> b` (swap `a` and `b` otherwise; if
@@ -414,6 +416,148 @@ impl PreparedVo {
     }
 }
 
+/// Boxes side by side, the culler's leaves: box `j` is `[lo[0][j], lo[1][j], lo[2][j],
+/// hi[0][j], hi[1][j], hi[2][j]]`, for `j` below [`LANES`]. Lanes past the boxes given hold
+/// zeros: whoever reads the answers masks them out.
+#[derive(Clone, Copy, Debug)]
+pub struct Lanes {
+    pub lo: [[f64; LANES]; 3],
+    pub hi: [[f64; LANES]; 3],
+}
+
+/// Boxes per [`Lanes`]. The lane tests are loops over fixed arrays, which the compiler turns
+/// into vector instructions (two lanes at once on the baseline x86-64, SSE2).
+pub const LANES: usize = 8;
+
+impl Lanes {
+    /// The first [`LANES`] boxes of `boxes` in lanes, the lanes past them zeros.
+    pub fn new(boxes: &[[f64; 6]]) -> Lanes {
+        let mut l = Lanes {
+            lo: [[0.0; LANES]; 3],
+            hi: [[0.0; LANES]; 3],
+        };
+        for (j, b) in boxes.iter().take(LANES).enumerate() {
+            for k in 0..3 {
+                l.lo[k][j] = b[k];
+                l.hi[k][j] = b[k + 3];
+            }
+        }
+        l
+    }
+
+    /// Box `j`.
+    pub fn get(&self, j: usize) -> [f64; 6] {
+        [
+            self.lo[0][j],
+            self.lo[1][j],
+            self.lo[2][j],
+            self.hi[0][j],
+            self.hi[1][j],
+            self.hi[2][j],
+        ]
+    }
+}
+
+/// [`Probe`] of every box of a [`Lanes`]: the same values, lane by lane.
+#[derive(Clone, Copy, Debug)]
+pub struct LaneProbe {
+    /// The grown footprints, `[x0, y0, x1, y1]`, by lane.
+    fp: [[f64; LANES]; 4],
+    zmin: [f64; LANES],
+    zlo: [f64; LANES],
+    z: [f64; LANES],
+    /// Bit `j`: box `j` is apart from the cell.
+    apart: u32,
+}
+
+/// Bit `j` set for each true `v[j]`.
+#[inline(always)]
+fn lane_bits(v: &[bool; LANES]) -> u32 {
+    let mut m = 0;
+    for (j, &b) in v.iter().enumerate() {
+        m |= u32::from(b) << j;
+    }
+    m
+}
+
+impl LaneProbe {
+    /// [`Probe::within`] of each box of `l`, with the same arithmetic.
+    #[inline]
+    pub fn within(view: &CellView, l: &Lanes, inside_apart: bool) -> LaneProbe {
+        let m = MARGIN_M;
+        let mut p = LaneProbe {
+            fp: [[0.0; LANES]; 4],
+            zmin: l.lo[2],
+            zlo: [0.0; LANES],
+            z: [0.0; LANES],
+            apart: 0,
+        };
+        for j in 0..LANES {
+            p.fp[0][j] = l.lo[0][j] - m;
+            p.fp[1][j] = l.lo[1][j] - m;
+            p.fp[2][j] = l.hi[0][j] + m;
+            p.fp[3][j] = l.hi[1][j] + m;
+            p.zlo[j] = l.lo[2][j] - m;
+            p.z[j] = l.hi[2][j] + m;
+        }
+        p.apart = if inside_apart {
+            u32::MAX
+        } else {
+            let [cx0, cy0, cx1, cy1] = view.rect;
+            let mut a = [false; LANES];
+            for (j, a) in a.iter_mut().enumerate() {
+                *a = (p.fp[0][j] > cx1 + m)
+                    | (p.fp[2][j] < cx0 - m)
+                    | (p.fp[1][j] > cy1 + m)
+                    | (p.fp[3][j] < cy0 - m);
+            }
+            lane_bits(&a)
+        };
+        p
+    }
+}
+
+impl PreparedVo {
+    /// [`Self::hides_probe_planes`] of each box of `p`, at once: bit `j` is set when box `j`
+    /// is hidden. The same arithmetic lane by lane, so the same answers bit for bit:
+    /// - a form's least value over a footprint is its value at the corner its coefficients'
+    ///   signs pick, which is the lesser of the two products on each axis in
+    ///   [`Self::footprint`] (for `k >= 0` and `x0 <= x1`, `k x0 <= k x1` after rounding;
+    ///   equal products can differ in the sign of a zero only, which no sum or `> 0` test
+    ///   tells apart), summed in the same order;
+    /// - the height part is [`Self::heights_hide`] without its early returns: its shortcut
+    ///   (`zmin >= g` and `z <= h`) is or-ed with the full test, which it implies anyway.
+    #[inline]
+    pub fn hides_lanes(&self, view: &CellView, p: &LaneProbe, todo: u8) -> u32 {
+        if !self.usable || !self.heights_ok {
+            return 0;
+        }
+        let mut inside = [true; LANES];
+        for (_, f) in self.open_planes(todo) {
+            let xs = if f[0] >= 0.0 { &p.fp[0] } else { &p.fp[2] };
+            let ys = if f[1] >= 0.0 { &p.fp[1] } else { &p.fp[3] };
+            for j in 0..LANES {
+                inside[j] &= f[0] * xs[j] + f[1] * ys[j] + f[2] > 0.0;
+            }
+        }
+        // [`Self::beyond`], lane by lane.
+        let k = self.beyond_form;
+        let bx = if k[0] >= 0.0 { &p.fp[0] } else { &p.fp[2] };
+        let by = if k[1] >= 0.0 { &p.fp[1] } else { &p.fp[3] };
+        let mut hid = [false; LANES];
+        for j in 0..LANES {
+            let low = p.zmin[j] >= self.g;
+            let short = low & (p.z[j] <= self.h);
+            let beyond = max(k[0] * bx[j] + k[1] * by[j] + k[2] - MARGIN_M, 0.0);
+            let f = 1.0 + beyond * self.inv_d_line;
+            let top = view.e1 + (self.h - view.e1) * f;
+            let bottom_ok = low | (p.zlo[j] >= view.e0 - (view.e0 - self.g) * f);
+            hid[j] = inside[j] & (short | ((p.z[j] <= top) & bottom_ok));
+        }
+        lane_bits(&hid) & p.apart
+    }
+}
+
 /// The part of rule 3 that depends on a box and the cell but not on the VO, computed once per
 /// box for every VO of the cell: the grown footprint, the bottom and the top, and whether the
 /// footprint is apart from the cell.
@@ -657,6 +801,7 @@ mod tests {
                 continue;
             }
             skipped += usize::from(left != ALL_PLANES);
+            let mut inners = Vec::new();
             for _ in 0..20 {
                 let (x0, x1) = (r(outer[0], outer[3]), r(outer[0], outer[3]));
                 let (y0, y1) = (r(outer[1], outer[4]), r(outer[1], outer[4]));
@@ -683,6 +828,16 @@ mod tests {
                 let h = p.hides_probe(&v, &pi);
                 assert_eq!(p.hides_probe_planes(&v, &pw, left), h, "{vo:?} {inner:?}");
                 hidden += usize::from(h);
+                inners.push((inner, h));
+            }
+            // The lane test of the same boxes, up to LANES at a time, answers box by box.
+            for chunk in inners.chunks(LANES) {
+                let boxes: Vec<[f64; 6]> = chunk.iter().map(|c| c.0).collect();
+                let lp = LaneProbe::within(&v, &Lanes::new(&boxes), g.probe.is_apart());
+                let bits = p.hides_lanes(&v, &lp, left);
+                for (j, &(inner, h)) in chunk.iter().enumerate() {
+                    assert_eq!(bits >> j & 1 == 1, h, "{vo:?} {inner:?}");
+                }
             }
         }
         assert!(
@@ -763,6 +918,7 @@ mod tests {
         for _ in 0..4000 {
             let vo = random_vo(&mut r);
             let p = PreparedVo::new(&v, &vo);
+            let mut lanes = Vec::new();
             for _ in 0..10 {
                 let (cx, cy, w, d) = (
                     r(-150.0, 160.0),
@@ -780,6 +936,7 @@ mod tests {
                     c == Cover::Hidden,
                     "{vo:?} {bx:?}"
                 );
+                lanes.push((bx, c == Cover::Hidden));
                 // The plain rule (three planes, the D_near / D_far bound) is implied.
                 if plain_hidden(&v, &vo, &bx) {
                     assert_eq!(c, Cover::Hidden, "{vo:?} {bx:?}");
@@ -827,6 +984,19 @@ mod tests {
                         ];
                         assert_ne!(p.cover(&v, &sub), Cover::Hidden, "{vo:?} {sub:?}");
                     }
+                }
+            }
+            // The culler's lane test of the same boxes answers the same, box by box (the
+            // boxes past the first LANES in a second call).
+            for chunk in lanes.chunks(LANES) {
+                let boxes: Vec<[f64; 6]> = chunk.iter().map(|c| c.0).collect();
+                let bits = p.hides_lanes(
+                    &v,
+                    &LaneProbe::within(&v, &Lanes::new(&boxes), false),
+                    ALL_PLANES,
+                );
+                for (j, &(bx, h)) in chunk.iter().enumerate() {
+                    assert_eq!(bits >> j & 1 == 1, h, "{vo:?} {bx:?}");
                 }
             }
         }
