@@ -49,8 +49,9 @@ use crate::runtime::occlusion::{
 /// with the binned split, 6, 8 and 12 are within 1% of each other.
 ///
 /// A leaf's boxes sit side by side in one [`Lanes`] and are tested at once: on the same city,
-/// that took 0.89 of the time of testing them one by one (median of 7 alternated runs of our
-/// timing loop), and leaves of 12 and 16 in as many lanes were slower than 8.
+/// that took 0.89 to 0.95 of the time of testing them one by one (medians of 7 to 15 paired
+/// runs of a timing loop, docs/EMBEDDING.md), and leaves of 12 and 16 in as many lanes were
+/// slower than 8.
 pub const LEAF_SIZE: usize = 8;
 const _: () = assert!(LEAF_SIZE <= LANES);
 /// How a metre of box top weighs against a metre of horizontal extent in the key a box is
