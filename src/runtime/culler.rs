@@ -16,16 +16,17 @@
 //!   rule. The VOs are tried in any order (the one that last hid something first), which
 //!   changes how many are tried, not the answer; a leaf's boxes are tested for `Hidden` alone,
 //!   side by side ([`PreparedVo::hides_lanes`], the same arithmetic as `cover` lane by lane).
-//!   Only the rounding of rule
-//!   3's orientation signs (relative 1e-16, against boxes that rule 3 grows by 1 mm) could tell
-//!   the two apart, at a box lying within about 1e-12 m of an umbra edge; even then the
-//!   hierarchy stays sound: a subtree is culled only when its bounds are hidden, which, by rule
-//!   3's margin, every box inside really is, and dropping a VO can only keep more objects;
+//!   Only the rounding of rule 3's orientation signs (relative 1e-16, against boxes that rule 3
+//!   grows by 1 mm) could tell the two apart, at a box lying within about 1e-12 m of an umbra
+//!   edge; even then the hierarchy stays sound: a subtree is culled only when its bounds are
+//!   hidden, which, by rule 3's margin, every box inside really is, and dropping a VO can only
+//!   keep more objects;
 //! - each VO carries down the walk the half-planes of its umbra that the bounds above were not
 //!   found strictly inside; the others are not tested again below, with the same answer bit
 //!   for bit (a form's least value over a footprint, rounded as computed, only grows as the
 //!   footprint shrinks: [`PreparedVo::cover_group_planes`]); so does the finding that the
-//!   bounds are apart from the cell, which holds for every box inside ([`Probe::within`](crate::runtime::occlusion::Probe::within));
+//!   bounds are apart from the cell, which holds for every box inside
+//!   ([`Probe::within`](crate::runtime::occlusion::Probe::within));
 //! - never culled: boxes that touch the cell (rule 3 refuses them), invalid boxes (a NaN or
 //!   infinite coordinate, or `min > max` on an axis; kept out of the hierarchy and always
 //!   returned), every object of a skipped cell, of a cell without VOs and of a cell id outside
@@ -552,8 +553,9 @@ fn planes_of(planes: u32, i: usize) -> u8 {
     (planes >> (3 * i)) as u8 & ALL_PLANES
 }
 
-/// Set while the subtree has not been found apart from the cell ([`Probe::within`](crate::runtime::occlusion::Probe::within)): the
-/// last bit of the word that carries the half-planes still to test down the walk.
+/// Set while the subtree has not been found apart from the cell
+/// ([`Probe::within`](crate::runtime::occlusion::Probe::within)): the last bit of the word that
+/// carries the half-planes still to test down the walk.
 const APART_TODO: u32 = 1 << 31;
 
 /// Every half-plane of every VO still to test, and the cell's apartness: where the walk starts.
