@@ -17,6 +17,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod runtime;
+#[cfg(test)]
+mod testutil;
 
 /// The fuzz targets' bodies, shared with the corpus replay test; not a public API.
 #[doc(hidden)]

@@ -682,6 +682,7 @@ pub const WALL_EDGE: u64 = 1 << 31;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testutil::Lcg;
 
     /// The 100 m cell `[0, 100]²`, counter-clockwise.
     fn cell_100() -> [DVec2; 4] {
@@ -701,13 +702,8 @@ mod tests {
     #[test]
     fn the_counting_sort_of_edge_keys_is_the_comparison_sort() {
         // Narrow spans (counting sort), negative keys, repeated keys, and a wide span (fallback).
-        let mut seed = 7u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) as i64
-        };
+        let mut g = Lcg(7);
+        let mut next = move || (g.next_u64() >> 33) as i64;
         for (n, span) in [(0, 1), (1, 1), (50, 3), (2000, 40), (300, 1 << 40)] {
             let mut keyed: Vec<((i64, i64), u32)> = (0..n)
                 .map(|i| ((next() % span - span / 2, next() % span), i as u32))
@@ -836,13 +832,9 @@ mod tests {
     }
 
     /// A seeded generator of integers below `n`.
-    fn lcg(mut seed: u64) -> impl FnMut(u64) -> u64 {
-        move |n| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) % n
-        }
+    fn lcg(seed: u64) -> impl FnMut(u64) -> u64 {
+        let mut g = Lcg(seed);
+        move |n| (g.next_u64() >> 33) % n
     }
 
     /// A 5 x 4 grid of unit squares (every inner edge shared), a duplicated square, and two
@@ -866,15 +858,10 @@ mod tests {
         // duplicated square: every subset drawn gives the sorting form's edges, in its order.
         let polys = grid_with_walls();
         let twins = EdgeTwins::new(&polys);
-        let mut seed = 7u64;
+        let mut g = Lcg(7);
         for _ in 0..300 {
             let ids: Vec<u32> = (0..polys.len() as u32)
-                .filter(|_| {
-                    seed = seed
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
-                    seed >> 62 != 0
-                })
+                .filter(|_| g.next_u64() >> 62 != 0)
                 .collect();
             let sub: Vec<&[DVec2]> = ids.iter().map(|&i| polys[i as usize].as_slice()).collect();
             assert_eq!(

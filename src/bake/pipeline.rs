@@ -999,13 +999,7 @@ mod tests {
 
     #[test]
     fn skipped_boxes_move_no_end_of_the_crossing_span() {
-        let mut seed = 5u64;
-        let mut next = |lo: f64, hi: f64| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + (hi - lo) * ((seed >> 11) as f64 / (1u64 << 53) as f64)
-        };
+        let mut next = crate::testutil::uniform(5);
         let mut inside = 0;
         for round in 0..300 {
             let x = next(-60.0, 900.0);

@@ -368,13 +368,8 @@ mod tests {
     /// from the points alone.
     #[test]
     fn rule_2_tighter_bound_holds_for_3d_rays() {
-        let mut seed = 7u64;
-        let mut rnd = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut g = crate::testutil::Lcg(7);
+        let mut rnd = move || g.next();
         let (e0, e1, g) = (1.5, 2.0, 0.0);
         let cell = [
             DVec2::new(0.0, 0.0),

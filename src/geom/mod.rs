@@ -83,11 +83,9 @@ mod tests {
             f64::NEG_INFINITY,
             f64::NAN,
         ];
-        let mut seed = 3u64;
+        let mut g = crate::testutil::Lcg(3);
         for _ in 0..100_000 {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            let seed = g.next_u64();
             xs.push(f64::from_bits(seed));
             xs.push((seed >> 11) as f64 / (1u64 << 40) as f64 - 4096.0);
         }

@@ -1722,13 +1722,8 @@ mod tests {
 
     #[test]
     fn the_incremental_span_sweep_answers_as_the_sorted_one() {
-        let mut seed = 11u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 33) % 64) as f64 / 16.0 - 1.0
-        };
+        let mut g = crate::testutil::Lcg(11);
+        let mut next = move || ((g.next_u64() >> 33) % 64) as f64 / 16.0 - 1.0;
         for _ in 0..20000 {
             let (from, to) = (next(), next());
             let n = (next() * 8.0 + 8.0) as usize;

@@ -954,20 +954,7 @@ mod tests {
         assert_eq!(out, vec![0, 1]);
     }
 
-    /// A small deterministic generator (no dependency).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, a: f64, b: f64) -> f64 {
-            a + (b - a) * self.next()
-        }
-    }
+    use crate::testutil::Lcg;
 
     /// A wall of cell 12 on one of its four sides, at `d` metres from the centre.
     fn random_wall(r: &mut Lcg) -> QVo {

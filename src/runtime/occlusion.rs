@@ -752,16 +752,7 @@ mod tests {
         }
     }
 
-    /// A fixed linear congruential sequence of uniform numbers in `[lo, hi)`.
-    fn lcg(seed: u64) -> impl FnMut(f64, f64) -> f64 {
-        let mut x = seed;
-        move |lo, hi| {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
-        }
-    }
+    use crate::testutil::uniform as lcg;
 
     /// A random VO standing on the ground around the 10 m cell of [`view`].
     fn random_vo(r: &mut impl FnMut(f64, f64) -> f64) -> VoGeom {
