@@ -11,15 +11,15 @@
 //! - a box that touches the (grown) cell is never hidden;
 //! - `Hidden` for a box implies `Hidden` for every box inside it (all three conditions are
 //!   monotone), which lets the culler cull a whole subtree at once.
-//! - the culler's box test, [`PreparedVo::hides_probe`], is `cover == Hidden` with the same
-//!   arithmetic in the same order, only cheaper (each form's least value alone); a test checks
-//!   the two agree. Its group and box tests that skip the half-planes an enclosing group lies
-//!   strictly inside ([`PreparedVo::cover_group_planes`], [`PreparedVo::hides_probe_planes`])
-//!   answer as the full tests, bit for bit (monotone rounding; a test checks them too), and so
-//!   does the probe of a box inside a box found apart from the cell, which is taken as apart
-//!   without a test ([`Probe::within`]). The culler's leaves test up to [`LANES`] boxes at
-//!   once ([`Lanes`], [`PreparedVo::hides_lanes`]), with the same arithmetic lane by lane and
-//!   the same answers (a test checks them against the box tests).
+//! - the culler's box test, [`PreparedVo::hides_lanes`], tests up to [`LANES`] boxes at once
+//!   ([`Lanes`]) and answers `cover == Hidden` for each, with the same arithmetic lane by lane,
+//!   only cheaper (each form's least value alone); tests check it box by box against `cover`
+//!   and against the one-box form kept for them (`hides_probe`). Its group and box tests that
+//!   skip the half-planes an enclosing group lies strictly inside
+//!   ([`PreparedVo::cover_group_planes`], and `todo` in `hides_lanes`) answer as the full tests,
+//!   bit for bit (monotone rounding; a test checks them too), and so does the probe of a box
+//!   inside a box found apart from the cell, which is taken as apart without a test
+//!   ([`Probe::within`]).
 //!
 //! ## The 2D umbra of a segment from a convex cell
 //! Let the cell lie strictly left of the directed line `a -> b` (swap `a` and `b` otherwise; if
@@ -242,15 +242,6 @@ impl PreparedVo {
         }
     }
 
-    /// Whether [`Self::cover_probe`] is `Hidden`. Cheaper: `Hidden` needs every corner strictly
-    /// inside each half-plane, so only each form's least value over the footprint is computed,
-    /// and the test stops at the first form that fails (where [`Self::footprint`] also finds the
-    /// greatest value, to tell `Outside` from `Partial`).
-    #[inline]
-    pub fn hides_probe(&self, view: &CellView, p: &Probe) -> bool {
-        self.hides_probe_planes(view, p, ALL_PLANES)
-    }
-
     /// The height part of rule 3, for a probe whose footprint is strictly inside the umbra.
     #[inline]
     fn heights_hide(&self, view: &CellView, p: &Probe) -> bool {
@@ -394,12 +385,24 @@ impl PreparedVo {
             Some((k, self.planes.get(k)?))
         })
     }
+}
+
+/// The one-box form of [`PreparedVo::hides_lanes`], which the culler used before its leaves
+/// went into lanes: kept for the tests as the lane test's reference.
+#[cfg(test)]
+impl PreparedVo {
+    /// Whether [`Self::cover_probe`] is `Hidden`. Cheaper: `Hidden` needs every corner strictly
+    /// inside each half-plane, so only each form's least value over the footprint is computed,
+    /// and the test stops at the first form that fails (where [`Self::footprint`] also finds the
+    /// greatest value, to tell `Outside` from `Partial`).
+    fn hides_probe(&self, view: &CellView, p: &Probe) -> bool {
+        self.hides_probe_planes(view, p, ALL_PLANES)
+    }
 
     /// [`Self::hides_probe`] for a box lying inside a group found strictly inside the
     /// half-planes missing from `todo` ([`Self::cover_group_planes`]): only those of `todo` are
     /// tested, with the same answer.
-    #[inline]
-    pub fn hides_probe_planes(&self, view: &CellView, p: &Probe, todo: u8) -> bool {
+    fn hides_probe_planes(&self, view: &CellView, p: &Probe, todo: u8) -> bool {
         if !self.usable {
             return false;
         }
@@ -518,8 +521,9 @@ impl LaneProbe {
 }
 
 impl PreparedVo {
-    /// [`Self::hides_probe_planes`] of each box of `p`, at once: bit `j` is set when box `j`
-    /// is hidden. The same arithmetic lane by lane, so the same answers bit for bit:
+    /// Whether each box of `p` is hidden ([`Self::cover_probe`] is `Hidden`) once the
+    /// half-planes missing from `todo` are known to hold ([`Self::cover_group_planes`]): bit
+    /// `j` is set when box `j` is hidden. The same arithmetic lane by lane, so the same answers bit for bit:
     /// - a form's least value over a footprint is its value at the corner its coefficients'
     ///   signs pick, which is the lesser of the two products on each axis in
     ///   [`Self::footprint`] (for `k >= 0` and `x0 <= x1`, `k x0 <= k x1` after rounding;
