@@ -69,6 +69,7 @@ impl Occludees {
             view,
             &p,
             [cx - radius, cy - radius, cx + radius, cy + radius],
+            &self.boxes,
             &mut out,
         );
         out

@@ -39,9 +39,7 @@
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::{Frame, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
-use crate::runtime::occlusion::{
-    Cover, GroupProbe, LaneProbe, Lanes, PreparedVo, ALL_PLANES, LANES,
-};
+use crate::runtime::occlusion::{Cover, GroupProbe, Lanes, PreparedVo, ALL_PLANES, LANES};
 
 /// Most boxes in a leaf. A box costs less to test than a node (it is tested with the VOs its
 /// leaf kept, for `Hidden` alone, from memory laid out in tree order): on the generated 10^5
@@ -475,12 +473,15 @@ impl BoxTree {
     /// Appends to `out`, ascending, the tree positions of the boxes meeting the rectangle
     /// `within = [x0, y0, x1, y1]` that `vo` hides from `view` (rule 3, [`PreparedVo::cover`]):
     /// whole subtrees at once where their bounds are hidden (rule 3 is monotone under
-    /// inclusion), none below bounds outside the umbra.
+    /// inclusion), none below bounds outside the umbra. `boxes` are the boxes by tree
+    /// position (`boxes[p]` is the input box [`Self::id_at`]`(p)`): the leaves keep their grown
+    /// form only ([`Lanes`]), and whether a box meets `within` is asked of the box itself.
     pub fn hidden_positions(
         &self,
         view: &crate::runtime::frame::CellView,
         vo: &PreparedVo,
         within: [f64; 4],
+        boxes: &[[f64; 6]],
         out: &mut Vec<u32>,
     ) {
         let meets = |b: &[f64; 6]| {
@@ -509,10 +510,11 @@ impl BoxTree {
             if kids.is_empty() {
                 let lanes = &self.lanes[node.kids[0] as usize];
                 let n = (node.end - node.start) as usize;
-                let probe = LaneProbe::within(view, lanes, false);
-                let hid = vo.hides_lanes(view, &probe, ALL_PLANES);
-                for j in (0..n).filter(|&j| hid >> j & 1 == 1 && meets(&lanes.get(j))) {
-                    out.push(node.start + j as u32);
+                let hid = vo.hides_lanes(view, lanes, lanes.apart(view, false), ALL_PLANES);
+                for p in (0..n as u32).map(|j| node.start + j) {
+                    if hid >> (p - node.start) & 1 == 1 && meets(&boxes[p as usize]) {
+                        out.push(p);
+                    }
                 }
                 continue;
             }
@@ -603,7 +605,7 @@ fn test(
 }
 
 /// The boxes of leaf `l` that a VO of `mask` (not empty) hides, as bits of `live` (bit `j`:
-/// box `j`): the VO-independent part of rule 3 once ([`LaneProbe`]), then each VO's test of
+/// box `j`): whether each box is apart from the cell once ([`Lanes::apart`]), then each VO's test of
 /// every box at once, of the half-planes `planes` leaves it ([`test`]), until every box of
 /// `live` is hidden. VO `*last` is tried first, and becomes the last VO that hid a box: a VO
 /// that hid boxes of a leaf tends to hide the next leaves of the depth-first walk too, which
@@ -617,7 +619,7 @@ fn hidden_lanes(
     l: &Lanes,
     live: u32,
 ) -> u32 {
-    let probe = LaneProbe::within(view, l, planes & APART_TODO == 0);
+    let apart = l.apart(view, planes & APART_TODO == 0);
     let mut left = mask;
     let mut i = *last;
     if mask & (1 << i) == 0 {
@@ -626,7 +628,7 @@ fn hidden_lanes(
     let mut hid = 0;
     loop {
         left &= !(1 << i);
-        let h = prepared[i].hides_lanes(view, &probe, planes_of(planes, i)) & live;
+        let h = prepared[i].hides_lanes(view, l, apart, planes_of(planes, i)) & live;
         if h & !hid != 0 {
             *last = i;
             hid |= h;
@@ -1111,8 +1113,13 @@ mod tests {
                     leaves += node.end - node.start;
                     assert!((node.end - node.start) as usize <= LEAF_SIZE);
                     let lanes = &t.lanes[node.kids[0] as usize];
-                    for b in (0..(node.end - node.start) as usize).map(|j| lanes.get(j)) {
-                        assert!(within(&b, &node.bounds));
+                    let leaf: Vec<[f64; 6]> = t.ids[node.start as usize..node.end as usize]
+                        .iter()
+                        .map(|&i| boxes[i as usize])
+                        .collect();
+                    assert_eq!(*lanes, Lanes::new(&leaf));
+                    for b in &leaf {
+                        assert!(within(b, &node.bounds));
                         assert!(b[5] >= node.min_top);
                     }
                     continue;

@@ -419,13 +419,19 @@ impl PreparedVo {
     }
 }
 
-/// Boxes side by side, the culler's leaves: box `j` is `[lo[0][j], lo[1][j], lo[2][j],
-/// hi[0][j], hi[1][j], hi[2][j]]`, for `j` below [`LANES`]. Lanes past the boxes given hold
-/// zeros: whoever reads the answers masks them out.
-#[derive(Clone, Copy, Debug)]
+/// Boxes side by side, the culler's leaves, held as the VO-independent part of rule 3 that
+/// [`Probe`] computes for one box, grown once when the tree is built rather than at every
+/// query: box `j` has the grown footprint `[fp[0][j], fp[1][j], fp[2][j], fp[3][j]]`, the
+/// bottom `zmin[j]` and the grown top `z[j]`, each the same float operation as in
+/// [`Probe::within`], so the same bits. Lanes past the boxes given hold the growth of zeros:
+/// whoever reads the answers masks them out.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lanes {
-    pub lo: [[f64; LANES]; 3],
-    pub hi: [[f64; LANES]; 3],
+    /// The grown footprints, `[x0, y0, x1, y1]`, by lane.
+    fp: [[f64; LANES]; 4],
+    zmin: [f64; LANES],
+    /// The tops grown by the margin.
+    z: [f64; LANES],
 }
 
 /// Boxes per [`Lanes`]. The lane tests are loops over fixed arrays, which the compiler turns
@@ -433,44 +439,49 @@ pub struct Lanes {
 pub const LANES: usize = 8;
 
 impl Lanes {
-    /// The first [`LANES`] boxes of `boxes` in lanes, the lanes past them zeros.
+    /// The first [`LANES`] boxes of `boxes` in lanes, the lanes past them zero boxes.
     pub fn new(boxes: &[[f64; 6]]) -> Lanes {
+        let m = MARGIN_M;
         let mut l = Lanes {
-            lo: [[0.0; LANES]; 3],
-            hi: [[0.0; LANES]; 3],
+            fp: [
+                [0.0 - m; LANES],
+                [0.0 - m; LANES],
+                [0.0 + m; LANES],
+                [0.0 + m; LANES],
+            ],
+            zmin: [0.0; LANES],
+            z: [0.0 + m; LANES],
         };
         for (j, b) in boxes.iter().take(LANES).enumerate() {
-            for k in 0..3 {
-                l.lo[k][j] = b[k];
-                l.hi[k][j] = b[k + 3];
-            }
+            // The same operations as in [`Probe::within`].
+            l.fp[0][j] = b[0] - m;
+            l.fp[1][j] = b[1] - m;
+            l.fp[2][j] = b[3] + m;
+            l.fp[3][j] = b[4] + m;
+            l.zmin[j] = b[2];
+            l.z[j] = b[5] + m;
         }
         l
     }
 
-    /// Box `j`.
-    pub fn get(&self, j: usize) -> [f64; 6] {
-        [
-            self.lo[0][j],
-            self.lo[1][j],
-            self.lo[2][j],
-            self.hi[0][j],
-            self.hi[1][j],
-            self.hi[2][j],
-        ]
+    /// Bit `j`: box `j` is apart from the cell of `view` ([`Probe::is_apart`]); every bit when
+    /// `inside_apart`, the boxes lying inside a group found apart ([`Probe::within`]).
+    #[inline]
+    pub fn apart(&self, view: &CellView, inside_apart: bool) -> u32 {
+        if inside_apart {
+            return u32::MAX;
+        }
+        let m = MARGIN_M;
+        let [cx0, cy0, cx1, cy1] = view.rect;
+        let mut a = [false; LANES];
+        for (j, a) in a.iter_mut().enumerate() {
+            *a = (self.fp[0][j] > cx1 + m)
+                | (self.fp[2][j] < cx0 - m)
+                | (self.fp[1][j] > cy1 + m)
+                | (self.fp[3][j] < cy0 - m);
+        }
+        lane_bits(&a)
     }
-}
-
-/// [`Probe`] of every box of a [`Lanes`]: the same values, lane by lane.
-#[derive(Clone, Copy, Debug)]
-pub struct LaneProbe {
-    /// The grown footprints, `[x0, y0, x1, y1]`, by lane.
-    fp: [[f64; LANES]; 4],
-    zmin: [f64; LANES],
-    zlo: [f64; LANES],
-    z: [f64; LANES],
-    /// Bit `j`: box `j` is apart from the cell.
-    apart: u32,
 }
 
 /// Bit `j` set for each true `v[j]`.
@@ -483,47 +494,11 @@ fn lane_bits(v: &[bool; LANES]) -> u32 {
     m
 }
 
-impl LaneProbe {
-    /// [`Probe::within`] of each box of `l`, with the same arithmetic.
-    #[inline]
-    pub fn within(view: &CellView, l: &Lanes, inside_apart: bool) -> LaneProbe {
-        let m = MARGIN_M;
-        let mut p = LaneProbe {
-            fp: [[0.0; LANES]; 4],
-            zmin: l.lo[2],
-            zlo: [0.0; LANES],
-            z: [0.0; LANES],
-            apart: 0,
-        };
-        for j in 0..LANES {
-            p.fp[0][j] = l.lo[0][j] - m;
-            p.fp[1][j] = l.lo[1][j] - m;
-            p.fp[2][j] = l.hi[0][j] + m;
-            p.fp[3][j] = l.hi[1][j] + m;
-            p.zlo[j] = l.lo[2][j] - m;
-            p.z[j] = l.hi[2][j] + m;
-        }
-        p.apart = if inside_apart {
-            u32::MAX
-        } else {
-            let [cx0, cy0, cx1, cy1] = view.rect;
-            let mut a = [false; LANES];
-            for (j, a) in a.iter_mut().enumerate() {
-                *a = (p.fp[0][j] > cx1 + m)
-                    | (p.fp[2][j] < cx0 - m)
-                    | (p.fp[1][j] > cy1 + m)
-                    | (p.fp[3][j] < cy0 - m);
-            }
-            lane_bits(&a)
-        };
-        p
-    }
-}
-
 impl PreparedVo {
     /// Whether each box of `p` is hidden ([`Self::cover_probe`] is `Hidden`) once the
-    /// half-planes missing from `todo` are known to hold ([`Self::cover_group_planes`]): bit
-    /// `j` is set when box `j` is hidden. The same arithmetic lane by lane, so the same answers bit for bit:
+    /// half-planes missing from `todo` are known to hold ([`Self::cover_group_planes`]), for
+    /// the boxes of `apart` ([`Lanes::apart`]; the others touch the cell): bit `j` is set when
+    /// box `j` is hidden. The same arithmetic lane by lane, so the same answers bit for bit:
     /// - a form's least value over a footprint is its value at the corner its coefficients'
     ///   signs pick, which is the lesser of the two products on each axis in
     ///   [`Self::footprint`] (for `k >= 0` and `x0 <= x1`, `k x0 <= k x1` after rounding;
@@ -532,7 +507,7 @@ impl PreparedVo {
     /// - the height part is [`Self::heights_hide`] without its early returns: its shortcut
     ///   (`zmin >= g` and `z <= h`) is or-ed with the full test, which it implies anyway.
     #[inline]
-    pub fn hides_lanes(&self, view: &CellView, p: &LaneProbe, todo: u8) -> u32 {
+    pub fn hides_lanes(&self, view: &CellView, p: &Lanes, apart: u32, todo: u8) -> u32 {
         if !self.usable || !self.heights_ok {
             return 0;
         }
@@ -555,10 +530,12 @@ impl PreparedVo {
             let beyond = max(k[0] * bx[j] + k[1] * by[j] + k[2] - MARGIN_M, 0.0);
             let f = 1.0 + beyond * self.inv_d_line;
             let top = view.e1 + (self.h - view.e1) * f;
-            let bottom_ok = low | (p.zlo[j] >= view.e0 - (view.e0 - self.g) * f);
+            // `zlo` of [`Probe::within`].
+            let zlo = p.zmin[j] - MARGIN_M;
+            let bottom_ok = low | (zlo >= view.e0 - (view.e0 - self.g) * f);
             hid[j] = inside[j] & (short | ((p.z[j] <= top) & bottom_ok));
         }
-        lane_bits(&hid) & p.apart
+        lane_bits(&hid) & apart
     }
 }
 
@@ -828,8 +805,8 @@ mod tests {
             // The lane test of the same boxes, up to LANES at a time, answers box by box.
             for chunk in inners.chunks(LANES) {
                 let boxes: Vec<[f64; 6]> = chunk.iter().map(|c| c.0).collect();
-                let lp = LaneProbe::within(&v, &Lanes::new(&boxes), g.probe.is_apart());
-                let bits = p.hides_lanes(&v, &lp, left);
+                let l = Lanes::new(&boxes);
+                let bits = p.hides_lanes(&v, &l, l.apart(&v, g.probe.is_apart()), left);
                 for (j, &(inner, h)) in chunk.iter().enumerate() {
                     assert_eq!(bits >> j & 1 == 1, h, "{vo:?} {inner:?}");
                 }
@@ -985,11 +962,8 @@ mod tests {
             // boxes past the first LANES in a second call).
             for chunk in lanes.chunks(LANES) {
                 let boxes: Vec<[f64; 6]> = chunk.iter().map(|c| c.0).collect();
-                let bits = p.hides_lanes(
-                    &v,
-                    &LaneProbe::within(&v, &Lanes::new(&boxes), false),
-                    ALL_PLANES,
-                );
+                let l = Lanes::new(&boxes);
+                let bits = p.hides_lanes(&v, &l, l.apart(&v, false), ALL_PLANES);
                 for (j, &(bx, h)) in chunk.iter().enumerate() {
                     assert_eq!(bits >> j & 1 == 1, h, "{vo:?} {bx:?}");
                 }
