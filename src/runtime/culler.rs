@@ -86,24 +86,57 @@ const STACK: usize = 128;
 const _: () = assert!(STACK >= 3 * (1 + (BINNED_LEVELS + 30).div_ceil(2)) + WIDTH);
 
 /// One node of the flat hierarchy. Its subtree's boxes are `start..end` in tree order; its
-/// children's ranges follow each other in that order.
+/// children's ranges follow each other in that order, and the children themselves follow each
+/// other in [`BoxTree::nodes`].
+///
+/// 64 bytes, aligned to 64: one cache line per node tested (the walk's loads wait on memory,
+/// and a node of 88 bytes spanned two lines).
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 struct Node {
     bounds: [f64; 6],
-    /// The least top (`zmax`) of the boxes below: with the bounds, it lets a VO be dropped for
-    /// a subtree whose every box is too tall for it (see [`PreparedVo::cover_group`]).
-    min_top: f64,
+    /// The least top (`zmax`) of the boxes below, rounded down to an `f32`: with the bounds,
+    /// it lets a VO be dropped for a subtree whose every box is too tall for it (see
+    /// [`PreparedVo::cover_group`]). A lower bound drops fewer VOs, never one that hides a box
+    /// below, so the rounding changes no answer.
+    min_top: f32,
     start: u32,
     end: u32,
-    /// Children (the first `len`), in tree order; a leaf has none, and its `kids[0]` is the
-    /// index of its boxes in [`BoxTree::lanes`].
-    kids: [u32; WIDTH],
-    len: u32,
+    /// `first << LINK_BITS | len`: the `len` children are nodes `first..first + len`; a leaf
+    /// has none, and its `first` is the index of its boxes in [`BoxTree::lanes`].
+    link: u32,
 }
+const _: () = assert!(std::mem::size_of::<Node>() == 64);
+
+/// Low bits of [`Node::link`] that hold the number of children.
+const LINK_BITS: u32 = 3;
+const _: () = assert!(WIDTH < 1 << LINK_BITS);
+/// Nodes and leaves, at most: their indices fit in [`Node::link`] above its `LINK_BITS`.
+const MAX_LINK: usize = (u32::MAX >> LINK_BITS) as usize;
 
 impl Node {
-    fn kids(&self) -> &[u32] {
-        &self.kids[..self.len as usize]
+    fn kids(&self) -> std::ops::Range<u32> {
+        let first = self.link >> LINK_BITS;
+        first..first + (self.link & ((1 << LINK_BITS) - 1))
+    }
+
+    fn is_leaf(&self) -> bool {
+        self.link & ((1 << LINK_BITS) - 1) == 0
+    }
+
+    /// A leaf's index in [`BoxTree::lanes`].
+    fn lanes(&self) -> usize {
+        (self.link >> LINK_BITS) as usize
+    }
+}
+
+/// `x` rounded down to an `f32` (to `f32::MAX` above it; `x` is not NaN).
+fn f32_below(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) > x {
+        f.next_down()
+    } else {
+        f
     }
 }
 
@@ -177,8 +210,7 @@ impl BoxTree {
                     min_top: 0.0,
                     start: 0,
                     end: 0,
-                    kids: [0; WIDTH],
-                    len: 0,
+                    link: 0,
                 },
                 left: LEAF,
                 right: LEAF,
@@ -204,7 +236,7 @@ impl BoxTree {
                 let mut node = BinNode {
                     node: Node {
                         bounds,
-                        min_top,
+                        min_top: f32_below(min_top),
                         start: s as u32,
                         end: e as u32,
                         ..blank.node
@@ -239,9 +271,13 @@ impl BoxTree {
             }
         }
         let mut nodes = widen(&nodes);
+        assert!(
+            nodes.len() <= MAX_LINK,
+            "BoxTree: more than {MAX_LINK} nodes"
+        );
         let mut lanes = Vec::new();
-        for node in nodes.iter_mut().filter(|n| n.len == 0) {
-            node.kids[0] = lanes.len() as u32;
+        for node in nodes.iter_mut().filter(|n| n.is_leaf()) {
+            node.link = (lanes.len() as u32) << LINK_BITS;
             let leaf: Vec<[f64; 6]> = items[node.start as usize..node.end as usize]
                 .iter()
                 .map(|&(_, b)| b)
@@ -295,7 +331,7 @@ impl BoxTree {
         }
         while let Some((ni, d)) = todo.pop() {
             best = best.max(d);
-            for &k in self.nodes[ni].kids() {
+            for k in self.nodes[ni].kids() {
                 todo.push((k as usize, d + 1));
             }
         }
@@ -450,10 +486,10 @@ fn widen(bin: &[BinNode]) -> Vec<Node> {
         let first = out.len();
         for (j, &f) in front.iter().enumerate() {
             out.push(bin[f as usize].node);
-            out[o].kids[j] = (first + j) as u32;
             todo.push((f as usize, first + j));
         }
-        out[o].len = len as u32;
+        // Past MAX_LINK nodes the build panics before the link is read.
+        out[o].link = ((first as u32) << LINK_BITS) | len as u32;
     }
     out
 }
@@ -498,7 +534,7 @@ impl BoxTree {
             if !meets(&node.bounds) {
                 continue;
             }
-            match vo.cover_group(view, &node.bounds, node.min_top) {
+            match vo.cover_group(view, &node.bounds, f64::from(node.min_top)) {
                 Cover::Outside => continue,
                 Cover::Hidden if inside(&node.bounds) => {
                     out.extend(node.start..node.end);
@@ -508,7 +544,7 @@ impl BoxTree {
             }
             let kids = node.kids();
             if kids.is_empty() {
-                let lanes = &self.lanes[node.kids[0] as usize];
+                let lanes = &self.lanes[node.lanes()];
                 let n = (node.end - node.start) as usize;
                 let hid = vo.hides_lanes(view, lanes, lanes.apart(view, false), ALL_PLANES);
                 for p in (0..n as u32).map(|j| node.start + j) {
@@ -524,7 +560,7 @@ impl BoxTree {
                 continue;
             }
             // The first child popped first: positions come out ascending.
-            for &k in kids.iter().rev() {
+            for k in kids.rev() {
                 stack[sp] = k;
                 sp += 1;
             }
@@ -676,7 +712,7 @@ impl Walk<'_> {
             vos,
             &mut self.last,
             &node.bounds,
-            node.min_top,
+            f64::from(node.min_top),
         ) else {
             self.st.subtrees_culled += 1;
             return;
@@ -695,7 +731,7 @@ impl Walk<'_> {
         if kids.is_empty() {
             let n = range.len();
             self.st.boxes_tested += n;
-            let lanes = &self.tree.lanes[node.kids[0] as usize];
+            let lanes = &self.tree.lanes[node.lanes()];
             let live = (1u32 << n) - 1;
             let hid = hidden_lanes(self.prepared, self.view, vos, &mut self.last, lanes, live);
             let mut visible = live & !hid;
@@ -780,13 +816,13 @@ pub fn pvs_with_stats(
         st,
     };
     // The nodes to visit next, and what their parent left them: the root first.
-    let (mut next, mut vos): (&[u32], _) = if tree.nodes.is_empty() {
-        (&[], (0, 0))
+    let (mut next, mut vos) = if tree.nodes.is_empty() {
+        (0..0, (0, 0))
     } else {
-        (&[0], (full, ALL_VO_PLANES))
+        (0..1, (full, ALL_VO_PLANES))
     };
     loop {
-        for &k in next {
+        for k in next {
             walk.visit(out, k, vos);
         }
         if walk.sp == 0 {
@@ -1108,11 +1144,11 @@ mod tests {
                 |a: &[f64; 6], b: &[f64; 6]| (0..3).all(|k| a[k] >= b[k] && a[k + 3] <= b[k + 3]);
             let mut leaves = 0;
             for node in &t.nodes {
-                assert!(node.start < node.end && node.len as usize <= WIDTH);
+                assert!(node.start < node.end && node.kids().len() <= WIDTH);
                 if node.kids().is_empty() {
                     leaves += node.end - node.start;
                     assert!((node.end - node.start) as usize <= LEAF_SIZE);
-                    let lanes = &t.lanes[node.kids[0] as usize];
+                    let lanes = &t.lanes[node.lanes()];
                     let leaf: Vec<[f64; 6]> = t.ids[node.start as usize..node.end as usize]
                         .iter()
                         .map(|&i| boxes[i as usize])
@@ -1120,14 +1156,21 @@ mod tests {
                     assert_eq!(*lanes, Lanes::new(&leaf));
                     for b in &leaf {
                         assert!(within(b, &node.bounds));
-                        assert!(b[5] >= node.min_top);
+                        assert!(b[5] >= f64::from(node.min_top));
                     }
                     continue;
                 }
-                assert!(node.len >= 2);
+                assert!(node.kids().len() >= 2);
+                // The least top rounded down, and no lower.
+                let exact = t.ids[node.start as usize..node.end as usize]
+                    .iter()
+                    .map(|&i| boxes[i as usize][5])
+                    .fold(f64::INFINITY, f64::min);
+                assert!(f64::from(node.min_top) <= exact);
+                assert!(f64::from(node.min_top.next_up()) > exact);
                 let mut at = node.start;
-                let mut min_top = f64::INFINITY;
-                for &k in node.kids() {
+                let mut min_top = f32::INFINITY;
+                for k in node.kids() {
                     let kid = &t.nodes[k as usize];
                     assert_eq!(kid.start, at);
                     at = kid.end;
