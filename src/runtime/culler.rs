@@ -187,7 +187,9 @@ impl BoxTree {
     /// keys ([`centre`]: x, y, and the top weighted by [`TOP_WEIGHT`]) along the longest extent.
     ///
     /// # Panics
-    /// With more than `u32::MAX` boxes (object indices are `u32`).
+    /// With more than `u32::MAX` boxes (object indices are `u32`), or a tree of more than
+    /// `u32::MAX >> 3` nodes (a node's link holds the first child's index and their number in
+    /// one `u32`): hundreds of millions of boxes.
     pub fn new(boxes: &[[f64; 6]]) -> BoxTree {
         assert!(
             boxes.len() <= u32::MAX as usize,
@@ -512,6 +514,9 @@ impl BoxTree {
     /// inclusion), none below bounds outside the umbra. `boxes` are the boxes by tree
     /// position (`boxes[p]` is the input box [`Self::id_at`]`(p)`): the leaves keep their grown
     /// form only ([`Lanes`]), and whether a box meets `within` is asked of the box itself.
+    ///
+    /// # Panics
+    /// When `boxes` does not hold one box per position ([`Self::positions`]).
     pub fn hidden_positions(
         &self,
         view: &crate::runtime::frame::CellView,
@@ -520,6 +525,7 @@ impl BoxTree {
         boxes: &[[f64; 6]],
         out: &mut Vec<u32>,
     ) {
+        assert_eq!(boxes.len(), self.positions(), "one box per tree position");
         let meets = |b: &[f64; 6]| {
             b[0] <= within[2] && b[3] >= within[0] && b[1] <= within[3] && b[4] >= within[1]
         };
@@ -641,9 +647,9 @@ fn test(
 }
 
 /// The boxes of leaf `l` that a VO of `mask` (not empty) hides, as bits of `live` (bit `j`:
-/// box `j`): whether each box is apart from the cell once ([`Lanes::apart`]), then each VO's test of
-/// every box at once, of the half-planes `planes` leaves it ([`test`]), until every box of
-/// `live` is hidden. VO `*last` is tried first, and becomes the last VO that hid a box: a VO
+/// box `j`): whether each box is apart from the cell once ([`Lanes::apart`]), then each VO's
+/// test of every box at once, of the half-planes `planes` leaves it ([`test`]), until every box
+/// of `live` is hidden. VO `*last` is tried first, and becomes the last VO that hid a box: a VO
 /// that hid boxes of a leaf tends to hide the next leaves of the depth-first walk too, which
 /// are their neighbours. The order changes no answer, only how many VOs are tried.
 #[inline]
