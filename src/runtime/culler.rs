@@ -133,10 +133,17 @@ impl Node {
 /// `x` rounded down to an `f32` (to `f32::MAX` above it; `x` is not NaN).
 fn f32_below(x: f64) -> f32 {
     let f = x as f32;
-    if f64::from(f) > x {
-        f.next_down()
+    if f64::from(f) <= x {
+        return f;
+    }
+    // The next `f32` below `f` (`f32::next_down`, newer than our MSRV): `f > x`, so `f` is
+    // neither NaN nor -inf; +inf steps down to `f32::MAX`.
+    if f == 0.0 {
+        -f32::from_bits(1)
+    } else if f > 0.0 {
+        f32::from_bits(f.to_bits() - 1)
     } else {
-        f
+        f32::from_bits(f.to_bits() + 1)
     }
 }
 
@@ -856,6 +863,45 @@ pub fn pvs_with_stats(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `f32_below` against `f32::next_down`'s definition, around zero, at and past the
+    /// extremes, and on values that are and are not `f32`s.
+    #[test]
+    fn f32_below_rounds_down_by_one_step_at_most() {
+        let cases = [
+            0.0,
+            -0.0,
+            1e-50,
+            -1e-50,
+            0.1,
+            -0.1,
+            1.0,
+            -1.0,
+            160.25,
+            1e38,
+            -1e38,
+            f64::from(f32::MAX),
+            f64::from(f32::MAX) * 2.0,
+            -f64::from(f32::MAX),
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for x in cases {
+            let f = f32_below(x);
+            assert!(f64::from(f) <= x, "{x}: {f}");
+            // No f32 lies strictly between: the next one above is above x.
+            let up = if f == f32::MAX {
+                f32::INFINITY
+            } else if f >= 0.0 {
+                f32::from_bits(if f == 0.0 { 1 } else { f.to_bits() + 1 })
+            } else if f == -f32::from_bits(1) {
+                0.0
+            } else {
+                f32::from_bits(f.to_bits() - 1)
+            };
+            assert!(f64::from(up) > x || f64::from(f) == x, "{x}: {f}, {up}");
+        }
+    }
     use crate::runtime::frame::QVo;
     use crate::runtime::grid::GridDescriptor;
     use proptest::prelude::*;
@@ -1173,7 +1219,7 @@ mod tests {
                     .map(|&i| boxes[i as usize][5])
                     .fold(f64::INFINITY, f64::min);
                 assert!(f64::from(node.min_top) <= exact);
-                assert!(f64::from(node.min_top.next_up()) > exact);
+                assert!(exact - f64::from(node.min_top) <= exact.abs() * f64::from(f32::EPSILON));
                 let mut at = node.start;
                 let mut min_top = f32::INFINITY;
                 for k in node.kids() {
