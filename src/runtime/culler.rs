@@ -115,13 +115,10 @@ const _: () = assert!(WIDTH < 1 << LINK_BITS);
 const MAX_LINK: usize = (u32::MAX >> LINK_BITS) as usize;
 
 impl Node {
+    /// The children: none for a leaf.
     fn kids(&self) -> std::ops::Range<u32> {
         let first = self.link >> LINK_BITS;
         first..first + (self.link & ((1 << LINK_BITS) - 1))
-    }
-
-    fn is_leaf(&self) -> bool {
-        self.link & ((1 << LINK_BITS) - 1) == 0
     }
 
     /// A leaf's index in [`BoxTree::lanes`].
@@ -165,7 +162,7 @@ pub struct BoxTree {
     nodes: Vec<Node>,
     /// Object indices in tree order (each subtree is a contiguous range).
     ids: Vec<u32>,
-    /// The boxes of each leaf, side by side (a leaf's `kids[0]` indexes them).
+    /// The boxes of each leaf, side by side ([`Node::lanes`] indexes them).
     lanes: Vec<Lanes>,
     /// The objects whose boxes are invalid ([`box_is_valid`]), ascending: always in the PVS.
     invalid: Vec<u32>,
@@ -285,7 +282,7 @@ impl BoxTree {
             "BoxTree: more than {MAX_LINK} nodes"
         );
         let mut lanes = Vec::new();
-        for node in nodes.iter_mut().filter(|n| n.is_leaf()) {
+        for node in nodes.iter_mut().filter(|n| n.kids().is_empty()) {
             node.link = (lanes.len() as u32) << LINK_BITS;
             let leaf: Vec<[f64; 6]> = items[node.start as usize..node.end as usize]
                 .iter()
@@ -560,8 +557,9 @@ impl BoxTree {
                 let lanes = &self.lanes[node.lanes()];
                 let n = (node.end - node.start) as usize;
                 let hid = vo.hides_lanes(view, lanes, lanes.apart(view, false), ALL_PLANES);
-                for p in (0..n as u32).map(|j| node.start + j) {
-                    if hid >> (p - node.start) & 1 == 1 && meets(&boxes[p as usize]) {
+                for j in 0..n {
+                    let p = node.start + j as u32;
+                    if hid >> j & 1 == 1 && meets(&boxes[p as usize]) {
                         out.push(p);
                     }
                 }

@@ -422,9 +422,9 @@ impl PreparedVo {
 /// Boxes side by side, the culler's leaves, held as the VO-independent part of rule 3 that
 /// [`Probe`] computes for one box, grown once when the tree is built rather than at every
 /// query: box `j` has the grown footprint `[fp[0][j], fp[1][j], fp[2][j], fp[3][j]]`, the
-/// bottom `zmin[j]` and the grown top `z[j]`, each the same float operation as in
-/// [`Probe::within`], so the same bits. Lanes past the boxes given hold the growth of zeros:
-/// whoever reads the answers masks them out.
+/// bottom `zmin[j]` and the grown top `z[j]`, grown as [`Probe::within`] grows them ([`grown`]),
+/// so the same bits. Lanes past the boxes given hold a grown zero box: whoever reads the
+/// answers masks them out.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lanes {
     /// The grown footprints, `[x0, y0, x1, y1]`, by lane.
@@ -441,25 +441,19 @@ pub const LANES: usize = 8;
 impl Lanes {
     /// The first [`LANES`] boxes of `boxes` in lanes, the lanes past them zero boxes.
     pub fn new(boxes: &[[f64; 6]]) -> Lanes {
-        let m = MARGIN_M;
         let mut l = Lanes {
-            fp: [
-                [0.0 - m; LANES],
-                [0.0 - m; LANES],
-                [0.0 + m; LANES],
-                [0.0 + m; LANES],
-            ],
+            fp: [[0.0; LANES]; 4],
             zmin: [0.0; LANES],
-            z: [0.0 + m; LANES],
+            z: [0.0; LANES],
         };
-        for (j, b) in boxes.iter().take(LANES).enumerate() {
-            // The same operations as in [`Probe::within`].
-            l.fp[0][j] = b[0] - m;
-            l.fp[1][j] = b[1] - m;
-            l.fp[2][j] = b[3] + m;
-            l.fp[3][j] = b[4] + m;
+        for j in 0..LANES {
+            let b = boxes.get(j).unwrap_or(&[0.0; 6]);
+            let (fp, z) = grown(b);
+            for (lane, v) in l.fp.iter_mut().zip(fp) {
+                lane[j] = v;
+            }
             l.zmin[j] = b[2];
-            l.z[j] = b[5] + m;
+            l.z[j] = z;
         }
         l
     }
@@ -471,17 +465,30 @@ impl Lanes {
         if inside_apart {
             return u32::MAX;
         }
-        let m = MARGIN_M;
-        let [cx0, cy0, cx1, cy1] = view.rect;
         let mut a = [false; LANES];
         for (j, a) in a.iter_mut().enumerate() {
-            *a = (self.fp[0][j] > cx1 + m)
-                | (self.fp[2][j] < cx0 - m)
-                | (self.fp[1][j] > cy1 + m)
-                | (self.fp[3][j] < cy0 - m);
+            *a = apart_from(view, self.fp.map(|lane| lane[j]));
         }
         lane_bits(&a)
     }
+}
+
+/// The footprint of `bx` grown by the margin, `[x0, y0, x1, y1]`, and its top grown by it: what
+/// rule 3 tests of a box, whether one at a time ([`Probe`]) or side by side ([`Lanes`]), so
+/// both hold the same bits.
+#[inline(always)]
+fn grown(bx: &[f64; 6]) -> ([f64; 4], f64) {
+    let m = MARGIN_M;
+    ([bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m], bx[5] + m)
+}
+
+/// Whether the grown footprint `fp` and the cell of `view`, grown by the margin, are apart on
+/// some axis: rule 3 refuses a box without it.
+#[inline(always)]
+fn apart_from(view: &CellView, fp: [f64; 4]) -> bool {
+    let m = MARGIN_M;
+    let [cx0, cy0, cx1, cy1] = view.rect;
+    (fp[0] > cx1 + m) | (fp[2] < cx0 - m) | (fp[1] > cy1 + m) | (fp[3] < cy0 - m)
 }
 
 /// Bit `j` set for each true `v[j]`.
@@ -570,18 +577,13 @@ impl Probe {
     /// flag down, as it does the half-planes).
     #[inline]
     pub fn within(view: &CellView, bx: &[f64; 6], inside_apart: bool) -> Probe {
-        let m = MARGIN_M;
-        let fp = [bx[0] - m, bx[1] - m, bx[3] + m, bx[4] + m];
-        let apart = inside_apart || {
-            let [cx0, cy0, cx1, cy1] = view.rect;
-            fp[0] > cx1 + m || fp[2] < cx0 - m || fp[1] > cy1 + m || fp[3] < cy0 - m
-        };
+        let (fp, z) = grown(bx);
         Probe {
             fp,
             zmin: bx[2],
-            zlo: bx[2] - m,
-            z: bx[5] + m,
-            apart,
+            zlo: bx[2] - MARGIN_M,
+            z,
+            apart: inside_apart || apart_from(view, fp),
         }
     }
 
