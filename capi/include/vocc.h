@@ -335,7 +335,8 @@ int32_t vocc_vo_geometry(const struct VoccFrame *frame,
  * xmax, ymax, zmax per object; object i is boxes[6i .. 6i + 6]). With `origin` NULL the boxes
  * are in the store's local frame; otherwise they are world coordinates and `origin` points to
  * the frame's 3 origin doubles. The boxes are copied. A box with a NaN or infinite coordinate,
- * or min > max, is kept in every PVS. On success `*out` is the tree; on failure NULL.
+ * or min > max, is kept in every PVS. More than 268,435,455 boxes are refused
+ * (`VOCC_ERR_ARGUMENT`). On success `*out` is the tree; on failure NULL.
  *
  * # Safety
  * `boxes` points to `6 * count` readable doubles (or `count` is 0); `origin` is NULL or

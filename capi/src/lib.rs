@@ -27,6 +27,7 @@ use std::ffi::c_char;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::ptr;
 
+use vocc::runtime::culler::MAX_BOXES;
 use vocc::runtime::format::{decode_blob, decode_frame, validate_frame, CellRecord, FormatError};
 use vocc::runtime::frame::{HEIGHT_LEVELS, QUANT_STEPS};
 use vocc::runtime::{pvs, BoxTree, CellId, Frame, GridDescriptor, QVo, Store, MAX_VOS_PER_CELL};
@@ -638,7 +639,8 @@ pub unsafe extern "C" fn vocc_vo_geometry(
 /// xmax, ymax, zmax per object; object i is boxes[6i .. 6i + 6]). With `origin` NULL the boxes
 /// are in the store's local frame; otherwise they are world coordinates and `origin` points to
 /// the frame's 3 origin doubles. The boxes are copied. A box with a NaN or infinite coordinate,
-/// or min > max, is kept in every PVS. On success `*out` is the tree; on failure NULL.
+/// or min > max, is kept in every PVS. More than 268,435,455 boxes are refused
+/// (`VOCC_ERR_ARGUMENT`). On success `*out` is the tree; on failure NULL.
 ///
 /// # Safety
 /// `boxes` points to `6 * count` readable doubles (or `count` is 0); `origin` is NULL or
@@ -654,13 +656,10 @@ pub unsafe extern "C" fn vocc_tree_new(
     clear_out(out);
     guard(err, || {
         let out = get_mut(out, "out")?;
-        if count > u32::MAX as usize {
+        if count > MAX_BOXES {
             return Err(fail(
                 VOCC_ERR_ARGUMENT,
-                format!(
-                    "{count} boxes: at most {} (object indices are u32)",
-                    u32::MAX
-                ),
+                format!("{count} boxes: at most {MAX_BOXES}"),
             ));
         }
         let n = count

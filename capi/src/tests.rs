@@ -748,6 +748,18 @@ fn null_pointers_and_bad_arguments_give_statuses_not_crashes() {
             ),
             VOCC_ERR_ARGUMENT
         );
+        // One box past the tree's limit is refused before any box is read.
+        assert_eq!(
+            vocc_tree_new(
+                fx.boxes.as_ptr().cast(),
+                vocc::runtime::culler::MAX_BOXES + 1,
+                ptr::null(),
+                &mut t,
+                &mut e
+            ),
+            VOCC_ERR_ARGUMENT
+        );
+        assert!(t.is_null());
         assert_eq!(
             vocc_tree_new(ptr::null(), 0, ptr::null(), &mut t, &mut e),
             VOCC_OK

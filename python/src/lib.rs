@@ -28,7 +28,7 @@ use pyo3::types::{PyBytes, PyDict};
 
 use vocc::bake::job::{BakeJob, Progress};
 use vocc::bake::pipeline::{BakeParams, Slices};
-use vocc::runtime::culler::{pvs, BoxTree};
+use vocc::runtime::culler::{pvs, BoxTree, MAX_BOXES};
 use vocc::runtime::format::{CellRecord, Store};
 use vocc::scene::{self, ReadOptions};
 
@@ -335,8 +335,11 @@ impl RawTree {
                 flat.len()
             )));
         }
-        if flat.len() / 6 > u32::MAX as usize {
-            return Err(VoccError::new_err("more than 2^32 - 1 boxes"));
+        if flat.len() / 6 > MAX_BOXES {
+            return Err(VoccError::new_err(format!(
+                "{} boxes: at most {MAX_BOXES}",
+                flat.len() / 6
+            )));
         }
         let world: Vec<[f64; 6]> = flat
             .chunks_exact(6)

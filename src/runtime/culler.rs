@@ -113,6 +113,10 @@ const LINK_BITS: u32 = 3;
 const _: () = assert!(WIDTH < 1 << LINK_BITS);
 /// Nodes and leaves, at most: their indices fit in [`Node::link`] above its `LINK_BITS`.
 const MAX_LINK: usize = (u32::MAX >> LINK_BITS) as usize;
+/// The most boxes a [`BoxTree`] takes: 268,435,455. Every split leaves boxes on both sides, so
+/// the binary tree over `n` boxes has at most `2n - 1` nodes, and widening only removes nodes:
+/// below `MAX_LINK` for `n <= MAX_LINK / 2`. Object indices, below `u32::MAX`, fit too.
+pub const MAX_BOXES: usize = MAX_LINK / 2;
 
 impl Node {
     /// The children: none for a leaf.
@@ -191,13 +195,11 @@ impl BoxTree {
     /// keys ([`centre`]: x, y, and the top weighted by [`TOP_WEIGHT`]) along the longest extent.
     ///
     /// # Panics
-    /// With more than `u32::MAX` boxes (object indices are `u32`), or a tree of more than
-    /// `u32::MAX >> 3` nodes (a node's link holds the first child's index and their number in
-    /// one `u32`): hundreds of millions of boxes.
+    /// With more than [`MAX_BOXES`] boxes (the C and Python bindings refuse them first).
     pub fn new(boxes: &[[f64; 6]]) -> BoxTree {
         assert!(
-            boxes.len() <= u32::MAX as usize,
-            "BoxTree: more than u32::MAX boxes"
+            boxes.len() <= MAX_BOXES,
+            "BoxTree: more than {MAX_BOXES} boxes"
         );
         let mut items: Vec<(u32, [f64; 6])> = Vec::with_capacity(boxes.len());
         let mut invalid = Vec::new();
@@ -277,10 +279,7 @@ impl BoxTree {
             }
         }
         let mut nodes = widen(&nodes);
-        assert!(
-            nodes.len() <= MAX_LINK,
-            "BoxTree: more than {MAX_LINK} nodes"
-        );
+        debug_assert!(nodes.len() <= MAX_LINK, "{} nodes", nodes.len());
         let mut lanes = Vec::new();
         for node in nodes.iter_mut().filter(|n| n.kids().is_empty()) {
             node.link = (lanes.len() as u32) << LINK_BITS;
@@ -494,7 +493,7 @@ fn widen(bin: &[BinNode]) -> Vec<Node> {
             out.push(bin[f as usize].node);
             todo.push((f as usize, first + j));
         }
-        // Past MAX_LINK nodes the build panics before the link is read.
+        // At most MAX_LINK nodes: BoxTree::new takes at most MAX_BOXES boxes.
         out[o].link = ((first as u32) << LINK_BITS) | len as u32;
     }
     out
