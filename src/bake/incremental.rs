@@ -11,7 +11,8 @@
 //! `centre(c) ± Plan::reach()`, in index order:
 //! - the inside test and the growth's blockers are R-tree queries within `cell ± search_m`
 //!   (`umbra::usable`; rays in the growth are filtered to those), the ground level within
-//!   `cell ± 50 m`, every blocker lying inside its object's box;
+//!   `cell ± 50 m`, or a wider square up to `cell ± search_m` when that one holds no blocker,
+//!   every blocker lying inside its object's box;
 //! - the occludee weights come from boxes meeting the umbra box, clamped to
 //!   `centre ± reach` (`decimate::Occludees::hidden`);
 //! - ids enter only through comparisons and sorting, so only their relative order matters, and

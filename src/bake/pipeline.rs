@@ -32,7 +32,10 @@ use crate::scene::Scene;
 
 /// Step between ground levels when the ground is not flat, metres (at least).
 pub const GROUND_STEP_M: f64 = 0.25;
-/// Blockers within this distance of a cell decide its ground, metres.
+/// Blockers within this distance of a cell decide its ground, metres. When none stands that
+/// near (a square, a field, the water beside a city), the radius doubles until some blocker is
+/// within it, up to the search radius of the VOs' blockers (`GrowParams::search_m`): the cell
+/// then stands on the ground of the nearest buildings, not on the scene's lowest.
 pub const GROUND_RADIUS_M: f64 = 50.0;
 /// The cell's ground is this percentile of the bases of the blockers near it, so that most of
 /// them stand on or below it (rule 2 needs a blocker's base at or below the VO's bottom).
@@ -379,19 +382,28 @@ impl<'s> Plan<'s> {
     }
 
     /// The ground level of a cell: the [`GROUND_QUANTILE_PCT`] percentile of the bases of the
-    /// blockers within [`GROUND_RADIUS_M`], rounded up to a level; level 0 on flat ground.
+    /// blockers within [`GROUND_RADIUS_M`] (or the least multiple of it by a power of two that
+    /// holds a blocker, up to the search radius), rounded up to a level; level 0 on flat
+    /// ground, and where no blocker stands within the search radius.
     pub fn ground_level(&self, id: CellId) -> u8 {
         let f = &self.frame;
         if !f.per_cell_ground() {
             return 0;
         }
         let cell = self.cell_polygon(id);
-        let r = DVec2::splat(GROUND_RADIUS_M);
-        let mut bases: Vec<f64> = self
-            .set
-            .in_box(cell[0] - r, cell[2] + r)
-            .map(|i| self.base[i as usize])
-            .collect();
+        let mut radius = GROUND_RADIUS_M;
+        let mut bases: Vec<f64> = Vec::new();
+        // Within the cell's reach (ARCHITECTURE.md invariant 13): `cell ± search_m` lies in
+        // `centre ± (search_m + cell size)`.
+        while bases.is_empty() && radius <= self.params.grow.search_m.max(GROUND_RADIUS_M) {
+            let r = DVec2::splat(radius);
+            bases = self
+                .set
+                .in_box(cell[0] - r, cell[2] + r)
+                .map(|i| self.base[i as usize])
+                .collect();
+            radius *= 2.0;
+        }
         if bases.is_empty() {
             return 0;
         }
@@ -978,6 +990,65 @@ pub fn encode(frame: &Frame, baked: &[CellBake]) -> Result<Vec<u8>, FormatError>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Square footprints `[x, y, side]` (world metres) with bases and heights, as GeoJSON.
+    fn squares(items: &[([f64; 3], f64, f64)]) -> Scene {
+        let feats: Vec<String> = items
+            .iter()
+            .map(|&([x, y, d], base, h)| {
+                format!(
+                    r#"{{"type":"Feature","properties":{{"h":{h},"b":{base}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]]}}}}"#,
+                    x + d,
+                    x + d,
+                    y + d,
+                    y + d
+                )
+            })
+            .collect();
+        let text = format!(
+            r#"{{"type":"FeatureCollection","features":[{}]}}"#,
+            feats.join(",")
+        );
+        let opts = crate::scene::ReadOptions {
+            height_attr: Some("h".into()),
+            base_attr: Some("b".into()),
+            ..Default::default()
+        };
+        crate::scene::load_bytes(&[("squares.geojson".into(), text.as_bytes())], &opts).unwrap()
+    }
+
+    /// The regression: a cell with no building within 50 m stood on the scene's lowest ground
+    /// (level 0), under the bases of the buildings around it, whose VOs then failed rule 2's base
+    /// test (Den Haag's empty cells beside its raised streets got no VO). It now takes the ground
+    /// of the nearest buildings, within the first radius of 100, 200, 400, 800 m that holds one.
+    #[test]
+    fn a_cell_with_no_building_near_stands_on_the_ground_of_the_nearest() {
+        // A building on low ground (base 0) at the west end; buildings on ground 6 m higher
+        // from 80 m east of the empty cell x in [200, 300) on; the scene starts at x = 0.
+        let s = squares(&[
+            ([0.0, 0.0, 20.0], 0.0, 10.0),
+            ([380.0, 0.0, 20.0], 6.0, 10.0),
+            ([380.0, 40.0, 20.0], 6.0, 10.0),
+            ([380.0, 80.0, 20.0], 6.0, 10.0),
+        ]);
+        let plan = Plan::new(&s, BakeParams::default()).unwrap();
+        let f = &plan.frame;
+        assert!(f.per_cell_ground());
+        let at = |x: f64| {
+            let local = x - s.origin.x;
+            f.grid.cell_at(local, 10.0 - s.origin.y).unwrap()
+        };
+        // Beside the low building: its own ground. Beside the raised ones: theirs.
+        assert_eq!(f.ground_z(plan.ground_level(at(10.0))), 0.0);
+        let raised = plan.ground_level(at(390.0));
+        assert!(
+            (f.ground_z(raised) - 6.0).abs() < f.ground_step,
+            "{}",
+            f.ground_z(raised)
+        );
+        // The empty cell: nothing within 50 m; within 100 m, the raised buildings alone.
+        assert_eq!(plan.ground_level(at(250.0)), raised);
+    }
 
     /// [`crossing_span`] without its skip: every crossing computed.
     fn crossing_span_plain(cs: &[(f64, f64)], boxes: &[[(f64, f64); 4]]) -> Option<(f64, f64)> {
