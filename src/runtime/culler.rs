@@ -861,6 +861,12 @@ pub fn pvs_with_stats(
 mod tests {
     use super::*;
 
+    use crate::runtime::frame::QVo;
+    use crate::runtime::grid::GridDescriptor;
+    use crate::testutil::Lcg;
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngSeed};
+
     /// `f32_below` against `f32::next_down`'s definition, around zero, at and past the
     /// extremes, and on values that are and are not `f32`s.
     #[test]
@@ -899,10 +905,6 @@ mod tests {
             assert!(f64::from(up) > x || f64::from(f) == x, "{x}: {f}, {up}");
         }
     }
-    use crate::runtime::frame::QVo;
-    use crate::runtime::grid::GridDescriptor;
-    use proptest::prelude::*;
-    use proptest::test_runner::{Config, RngSeed};
 
     /// A 5×5 grid of 100 m cells, quantum 0.5 m (VO ends within 128 m of the cell centre).
     fn frame() -> Frame {
@@ -1040,8 +1042,6 @@ mod tests {
         pvs(&f, 12, &rec, &BoxTree::new(&bad), &mut out);
         assert_eq!(out, vec![0, 1]);
     }
-
-    use crate::testutil::Lcg;
 
     /// A wall of cell 12 on one of its four sides, at `d` metres from the centre.
     fn random_wall(r: &mut Lcg) -> QVo {
