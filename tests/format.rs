@@ -14,7 +14,7 @@ use vocc::runtime::format::{
     decode_blob, decode_frame, encode_blob, encode_frame, encode_store, CellRecord, FormatError,
     Store, VoList, BLOB_MIN_LEN, FRAME_LEN, HEADER_LEN,
 };
-use vocc::runtime::{pvs, BoxTree, Frame, GridDescriptor, QVo};
+use vocc::runtime::{pvs, BoxTree, Frame, GridDescriptor, QPoint, QVo};
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting, per thread (tests run in parallel).
@@ -109,10 +109,8 @@ fn doc_frame() -> Frame {
 
 fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
     QVo {
-        x1,
-        y1,
-        x2,
-        y2,
+        a: QPoint::fine(x1, y1),
+        b: QPoint::fine(x2, y2),
         level,
     }
 }
@@ -185,14 +183,14 @@ fn doc_blob_examples_are_the_encoder_output() {
 fn doc_worked_vo_decoding_matches_the_frame() {
     // FORMAT.md section 9.1, prose after the dump.
     let f = doc_frame();
-    let a = QVo::from_bytes([0xc4, 0xf0, 0x42, 0xc5, 0x5b]);
+    let a = QVo::from_bytes_v1([0xc4, 0xf0, 0x42, 0xc5, 0x5b]);
     assert_eq!(a, q(196, 376, 336, 376, 5));
     let g = f.dequantize(0, 4, &a).unwrap();
     assert_eq!(
         (g.a, g.b, g.g, g.h),
         ([20.0, 110.0], [90.0, 110.0], 162.0, 172.20703125)
     );
-    let b = QVo::from_bytes([0x78, 0x61, 0xe1, 0xd5, 0x3a]);
+    let b = QVo::from_bytes_v1([0x78, 0x61, 0xe1, 0xd5, 0x3a]);
     assert_eq!(b, q(376, 176, 376, 346, 3));
     let g = f.dequantize(0, 4, &b).unwrap();
     assert_eq!((g.a, g.b, g.h), ([110.0, 10.0], [110.0, 95.0], 167.8125));
@@ -582,7 +580,7 @@ fn s12_payload_len_inconsistent_with_the_counts() {
 #[test]
 fn s13_degenerate_vo() {
     let mut s = doc_store();
-    let degenerate = q(300, 20, 300, 20, 9).to_bytes();
+    let degenerate = q(300, 20, 300, 20, 9).to_bytes_v1();
     s[0x95..0x9a].copy_from_slice(&degenerate);
     fix_store_crc(&mut s);
     assert_eq!(
@@ -788,7 +786,7 @@ fn b8_id_outside_the_grid() {
 fn b9_degenerate_vo() {
     let f = doc_frame();
     let mut b = doc_hex("blob-cell0");
-    b[0x10..0x15].copy_from_slice(&q(7, 8, 7, 8, 0).to_bytes());
+    b[0x10..0x15].copy_from_slice(&q(7, 8, 7, 8, 0).to_bytes_v1());
     fix_blob_crc(&mut b);
     assert_eq!(
         decode_blob(&f, &b).unwrap_err(),

@@ -18,7 +18,7 @@ use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 use vocc::runtime::crc::crc32;
-use vocc::runtime::{encode_store, CellRecord, Frame, GridDescriptor, QVo, Store};
+use vocc::runtime::{encode_store, CellRecord, Frame, GridDescriptor, QPoint, QVo, Store};
 use vocc::scene::{load_bytes, walkable, LoadError, LoadErrorKind, Location, ReadOptions, Scene};
 
 fn vocc(args: &[&str]) -> Output {
@@ -75,10 +75,8 @@ fn store_bytes() -> Vec<u8> {
             k => {
                 let vos: Vec<QVo> = (0..k - 1)
                     .map(|j| QVo {
-                        x1: 100 + i,
-                        y1: 376,
-                        x2: 300 + j,
-                        y2: 376 - j,
+                        a: QPoint::fine(100 + i, 376),
+                        b: QPoint::fine(300 + j, 376 - j),
                         level: (i % 16) as u8,
                     })
                     .collect();

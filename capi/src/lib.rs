@@ -29,7 +29,7 @@ use std::ptr;
 
 use vocc::runtime::culler::MAX_BOXES;
 use vocc::runtime::format::{decode_blob, decode_frame, validate_frame, CellRecord, FormatError};
-use vocc::runtime::frame::{HEIGHT_LEVELS, QUANT_STEPS};
+use vocc::runtime::frame::QPoint;
 use vocc::runtime::{pvs, BoxTree, CellId, Frame, GridDescriptor, QVo, Store, MAX_VOS_PER_CELL};
 
 /// Success.
@@ -336,10 +336,10 @@ impl From<&CellRecord> for VoccCell {
         };
         for (dst, q) in c.vos.iter_mut().zip(r.vos()) {
             *dst = VoccVo {
-                x1: q.x1,
-                y1: q.y1,
-                x2: q.x2,
-                y2: q.y2,
+                x1: q.a.x,
+                y1: q.a.y,
+                x2: q.b.x,
+                y2: q.b.y,
                 level: q.level,
             };
         }
@@ -361,21 +361,17 @@ fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
         )
     })?;
     let mut qs = [QVo {
-        x1: 0,
-        y1: 0,
-        x2: 0,
-        y2: 0,
+        a: QPoint::fine(0, 0),
+        b: QPoint::fine(0, 0),
         level: 0,
     }; VOCC_MAX_VOS];
     for (k, (v, q)) in vos.iter().zip(qs.iter_mut()).enumerate() {
         *q = QVo {
-            x1: v.x1,
-            y1: v.y1,
-            x2: v.x2,
-            y2: v.y2,
+            a: QPoint::fine(v.x1, v.y1),
+            b: QPoint::fine(v.x2, v.y2),
             level: v.level,
         };
-        if [q.x1, q.y1, q.x2, q.y2].iter().any(|&x| x >= QUANT_STEPS) || q.level >= HEIGHT_LEVELS {
+        if !q.in_range() || !q.fits_v1() {
             return Err(fail(
                 VOCC_ERR_ARGUMENT,
                 format!("cell: VO {k} has a field out of range (coordinates 0..512, level 0..16)"),

@@ -66,10 +66,8 @@ fn frame() -> Frame {
 
 fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
     QVo {
-        x1,
-        y1,
-        x2,
-        y2,
+        a: QPoint::fine(x1, y1),
+        b: QPoint::fine(x2, y2),
         level,
     }
 }

@@ -295,7 +295,7 @@ impl RawStore {
                 .dequantize(id, rec.ground(), q)
                 .ok_or_else(|| VoccError::new_err(format!("cell {id} is outside the grid")))?;
             geom.extend([g.a[0], g.a[1], g.b[0], g.b[1], g.g, g.h]);
-            for v in [q.x1, q.y1, q.x2, q.y2, q.level as u16] {
+            for v in [q.a.x, q.a.y, q.b.x, q.b.y, q.level as u16] {
                 grid.extend(v.to_le_bytes());
             }
         }

@@ -14,7 +14,7 @@
 
 use glam::DVec2;
 
-use crate::runtime::frame::{Frame, QVo, QUANT_STEPS};
+use crate::runtime::frame::{Frame, QPoint, QVo, QUANT_STEPS};
 use crate::runtime::grid::CellId;
 
 /// Most `check` calls spent on one VO.
@@ -102,10 +102,8 @@ pub fn quantize(
                 break;
             }
             let qvo = QVo {
-                x1: ka.0,
-                y1: ka.1,
-                x2: kb.0,
-                y2: kb.1,
+                a: QPoint::fine(ka.0, ka.1),
+                b: QPoint::fine(kb.0, kb.1),
                 level,
             };
             let Some(g) = frame.dequantize(id, ground, &qvo) else {

@@ -39,7 +39,7 @@ fn vos_json(f: &Frame, id: CellId, rec: &CellRecord) -> Vec<serde_json::Value> {
         .iter()
         .filter_map(|q| {
             let g = f.dequantize(id, rec.ground(), q)?;
-            let hex: String = q.to_bytes().iter().map(|b| format!("{b:02x}")).collect();
+            let hex: String = q.to_bytes_v1().iter().map(|b| format!("{b:02x}")).collect();
             Some(json!({
                 "a": [g.a[0] + o[0], g.a[1] + o[1]],
                 "b": [g.b[0] + o[0], g.b[1] + o[1]],
@@ -322,7 +322,7 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
             let Some(g) = f.dequantize(id, rec.ground(), q) else {
                 continue;
             };
-            let hex: String = q.to_bytes().iter().map(|b| format!("{b:02x}")).collect();
+            let hex: String = q.to_bytes_v1().iter().map(|b| format!("{b:02x}")).collect();
             writeln!(
                 out,
                 "  VO {k}: ({:.3}, {:.3}) - ({:.3}, {:.3}), {:.1} m long, {:.2}..{:.2} m, level {}, bytes {hex}",

@@ -861,7 +861,7 @@ pub fn pvs_with_stats(
 mod tests {
     use super::*;
 
-    use crate::runtime::frame::QVo;
+    use crate::runtime::frame::{QPoint, QVo};
     use crate::runtime::grid::GridDescriptor;
     use crate::testutil::Lcg;
     use proptest::prelude::*;
@@ -935,10 +935,8 @@ mod tests {
     /// A VO of the centre cell (id 12, centre (250, 250)) from `a` to `b`.
     fn vo(a: [f64; 2], b: [f64; 2], level: u8) -> QVo {
         QVo {
-            x1: k(a[0], 250.0),
-            y1: k(a[1], 250.0),
-            x2: k(b[0], 250.0),
-            y2: k(b[1], 250.0),
+            a: QPoint::fine(k(a[0], 250.0), k(a[1], 250.0)),
+            b: QPoint::fine(k(b[0], 250.0), k(b[1], 250.0)),
             level,
         }
     }
@@ -1066,10 +1064,8 @@ mod tests {
                 random_wall(r)
             } else {
                 QVo {
-                    x1: (r.next() * 512.0) as u16,
-                    y1: (r.next() * 512.0) as u16,
-                    x2: (r.next() * 512.0) as u16,
-                    y2: (r.next() * 512.0) as u16,
+                    a: QPoint::fine((r.next() * 512.0) as u16, (r.next() * 512.0) as u16),
+                    b: QPoint::fine((r.next() * 512.0) as u16, (r.next() * 512.0) as u16),
                     level: (r.next() * 16.0) as u8,
                 }
             };

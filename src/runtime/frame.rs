@@ -4,19 +4,26 @@
 //! cell's quantized VOs. Output: each VO as a local segment with its height range [g, h], and the
 //! cell's view (rectangle and eye heights) that rule 3 needs.
 //! Invariants:
-//! - a quantized endpoint is `centre + (k - 256) * quantum` with `k` in `0..512`, where `centre`
-//!   is the cell's centre; with a power-of-two quantum and a dyadic grid, every dequantized
-//!   endpoint is exact in f64, so the bake's verifier checks exactly the segment the runtime uses;
-//! - the VO top of level `k` is `e1 + h0 * (h_ratio^k - 1)`, computed by one function
+//! - a quantized endpoint is `centre + (k - 256) * quantum * 2^e` with `k` in `0..512` per axis
+//!   and `e` in `0..8` ([`QPoint`]; store format 1 has `e = 0` only), where `centre` is the
+//!   cell's centre; with a power-of-two quantum and a dyadic grid, every dequantized endpoint is
+//!   exact in f64, so the bake's verifier checks exactly the segment the runtime uses;
+//! - the VO top of level `k` (`0..32`; format 1: `0..16`) is `e1 + h0 * (h_ratio^k - 1)`, computed by one function
 //!   ([`Frame::vo_top`]) that the bake also uses: the bake checks what the runtime will read;
 //! - the VO bottom `g` is the cell's ground, and the eyes stand at `g + eye_lo ..= g + eye_hi`.
 
 use crate::runtime::grid::{CellId, GridDescriptor};
 
-/// Quantized coordinates per axis: endpoints use `k` in `0..QUANT_STEPS`.
+/// Mantissa steps per axis of a quantized endpoint: `x` and `y` in `0..QUANT_STEPS`, offset by
+/// half (`x - 256`).
 pub const QUANT_STEPS: u16 = 512;
-/// Height levels: `0..HEIGHT_LEVELS`.
-pub const HEIGHT_LEVELS: u8 = 16;
+/// Exponents of a quantized endpoint: `e` in `0..EXPONENTS` (store format 2; format 1 has `e = 0`
+/// only).
+pub const EXPONENTS: u8 = 8;
+/// Height levels: `0..HEIGHT_LEVELS` (store format 2).
+pub const HEIGHT_LEVELS: u8 = 32;
+/// Height levels of store format 1: `0..HEIGHT_LEVELS_V1`.
+pub const HEIGHT_LEVELS_V1: u8 = 16;
 /// At most this many VOs per cell.
 pub const MAX_VOS_PER_CELL: usize = 10;
 
@@ -27,7 +34,8 @@ pub struct Frame {
     pub origin: [f64; 3],
     /// The cell grid, in the local frame.
     pub grid: GridDescriptor,
-    /// Step of the VO endpoint grid, metres (a power of two).
+    /// Finest step of the VO endpoint grid, metres (a power of two): an endpoint of exponent `e`
+    /// lies on the grid of step `quantum * 2^e` around its cell's centre.
     pub quantum: f64,
     /// Eye heights above the cell's ground, metres: `0 <= eye_lo <= eye_hi`.
     pub eye_lo: f64,
@@ -42,44 +50,154 @@ pub struct Frame {
     pub h_ratio: f64,
 }
 
-/// One VO as stored: endpoint grid coordinates and a height level.
+/// One quantized VO endpoint: the point `centre + (x - 256, y - 256) * quantum * 2^e` of its
+/// cell. Precision follows distance: the step doubles with each exponent, so a far endpoint is
+/// held to about the same angle, seen from the cell, as a near one (1/256 to 1/128 of its
+/// distance along the larger axis).
+///
+/// A point is *canonical* when no smaller exponent holds it: `e == 0`, or `x - 256` or
+/// `y - 256` lies outside `-128..128`. Every position has exactly one canonical form.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct QPoint {
+    pub e: u8,
+    pub x: u16,
+    pub y: u16,
+}
+
+impl QPoint {
+    /// A point of exponent 0 (the only form of store format 1).
+    pub const fn fine(x: u16, y: u16) -> QPoint {
+        QPoint { e: 0, x, y }
+    }
+
+    /// Whether every field lies in its range (`e < 8`, `x, y < 512`).
+    pub fn in_range(&self) -> bool {
+        self.e < EXPONENTS && self.x < QUANT_STEPS && self.y < QUANT_STEPS
+    }
+
+    /// Whether no smaller exponent holds the same position.
+    pub fn is_canonical(&self) -> bool {
+        let half = |v: u16| (128..384).contains(&v);
+        self.e == 0 || !(half(self.x) && half(self.y))
+    }
+
+    /// The canonical form of the same position (fields in range).
+    pub fn canonical(mut self) -> QPoint {
+        while !self.is_canonical() {
+            // `x - 256` in `-128..128`: twice that on the finer grid.
+            self.x = 2 * self.x - 256;
+            self.y = 2 * self.y - 256;
+            self.e -= 1;
+        }
+        self
+    }
+
+    /// The offset from the cell's centre in units of the frame's quantum, exact.
+    pub fn steps(&self) -> (i64, i64) {
+        (
+            (self.x as i64 - 256) << self.e,
+            (self.y as i64 - 256) << self.e,
+        )
+    }
+
+    /// The offset from the cell's centre, metres: exact in f64 for a power-of-two `quantum`.
+    pub fn offset(&self, quantum: f64) -> [f64; 2] {
+        let step = quantum * (1u32 << self.e) as f64;
+        [
+            (self.x as f64 - 256.0) * step,
+            (self.y as f64 - 256.0) * step,
+        ]
+    }
+}
+
+/// One VO as stored: two endpoints and a height level.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct QVo {
-    pub x1: u16,
-    pub y1: u16,
-    pub x2: u16,
-    pub y2: u16,
+    pub a: QPoint,
+    pub b: QPoint,
     pub level: u8,
 }
 
+/// Bytes of a VO in store format 2.
+pub const VO_BYTES: usize = 6;
+/// Bytes of a VO in store format 1.
+pub const VO_BYTES_V1: usize = 5;
+
 impl QVo {
-    /// The 5 stored bytes: a 40-bit little-endian word with `x1` in bits 0..9, `y1` in 9..18,
-    /// `x2` in 18..27, `y2` in 27..36 and the level in 36..40. Fields must be in range.
-    pub fn to_bytes(&self) -> [u8; 5] {
-        let w: u64 = (self.x1 as u64 & 0x1ff)
-            | (self.y1 as u64 & 0x1ff) << 9
-            | (self.x2 as u64 & 0x1ff) << 18
-            | (self.y2 as u64 & 0x1ff) << 27
+    /// The 6 stored bytes of format 2: a 48-bit little-endian word with endpoint `a` in bits
+    /// 0..21 (`e` 0..3, `x` 3..12, `y` 12..21), endpoint `b` in 21..42 (same layout), the level
+    /// in 42..47, and bit 47 clear (reserved). Fields must be in range.
+    pub fn to_bytes(&self) -> [u8; VO_BYTES] {
+        let p = |q: &QPoint| -> u64 {
+            (q.e as u64 & 0x7) | (q.x as u64 & 0x1ff) << 3 | (q.y as u64 & 0x1ff) << 12
+        };
+        let w: u64 = p(&self.a) | p(&self.b) << 21 | (self.level as u64 & 0x1f) << 42;
+        let b = w.to_le_bytes();
+        [b[0], b[1], b[2], b[3], b[4], b[5]]
+    }
+
+    /// Inverse of [`QVo::to_bytes`] for every 6-byte value whose reserved bit 47 is clear (the
+    /// decoders check that bit, [`QVo::reserved_bit`]).
+    pub fn from_bytes(b: [u8; VO_BYTES]) -> QVo {
+        let w = u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], 0, 0]);
+        let p = |v: u64| QPoint {
+            e: (v & 0x7) as u8,
+            x: (v >> 3 & 0x1ff) as u16,
+            y: (v >> 12 & 0x1ff) as u16,
+        };
+        QVo {
+            a: p(w),
+            b: p(w >> 21),
+            level: (w >> 42 & 0x1f) as u8,
+        }
+    }
+
+    /// Bit 47 of a format-2 VO, reserved: a format 2.0 decoder rejects a VO that sets it.
+    pub fn reserved_bit(b: [u8; VO_BYTES]) -> bool {
+        b[5] & 0x80 != 0
+    }
+
+    /// The 5 stored bytes of format 1: a 40-bit little-endian word with `a.x` in bits 0..9,
+    /// `a.y` in 9..18, `b.x` in 18..27, `b.y` in 27..36 and the level in 36..40. Only for a VO
+    /// that format 1 can hold ([`QVo::fits_v1`]).
+    pub fn to_bytes_v1(&self) -> [u8; VO_BYTES_V1] {
+        let w: u64 = (self.a.x as u64 & 0x1ff)
+            | (self.a.y as u64 & 0x1ff) << 9
+            | (self.b.x as u64 & 0x1ff) << 18
+            | (self.b.y as u64 & 0x1ff) << 27
             | (self.level as u64 & 0xf) << 36;
         let b = w.to_le_bytes();
         [b[0], b[1], b[2], b[3], b[4]]
     }
 
-    /// Inverse of [`QVo::to_bytes`]; every 5-byte value decodes.
-    pub fn from_bytes(b: [u8; 5]) -> QVo {
+    /// Inverse of [`QVo::to_bytes_v1`]; every 5-byte value decodes (both exponents 0).
+    pub fn from_bytes_v1(b: [u8; VO_BYTES_V1]) -> QVo {
         let w = u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], 0, 0, 0]);
         QVo {
-            x1: (w & 0x1ff) as u16,
-            y1: (w >> 9 & 0x1ff) as u16,
-            x2: (w >> 18 & 0x1ff) as u16,
-            y2: (w >> 27 & 0x1ff) as u16,
+            a: QPoint::fine((w & 0x1ff) as u16, (w >> 9 & 0x1ff) as u16),
+            b: QPoint::fine((w >> 18 & 0x1ff) as u16, (w >> 27 & 0x1ff) as u16),
             level: (w >> 36 & 0xf) as u8,
         }
     }
 
-    /// Both endpoints the same grid point: a zero-length VO, which a decoder rejects.
+    /// Whether store format 1 can hold this VO: exponents 0, level below 16.
+    pub fn fits_v1(&self) -> bool {
+        self.a.e == 0 && self.b.e == 0 && self.level < HEIGHT_LEVELS_V1
+    }
+
+    /// Whether every field lies in its range (format 2).
+    pub fn in_range(&self) -> bool {
+        self.a.in_range() && self.b.in_range() && self.level < HEIGHT_LEVELS
+    }
+
+    /// Whether both endpoints are canonical ([`QPoint::is_canonical`]).
+    pub fn is_canonical(&self) -> bool {
+        self.a.is_canonical() && self.b.is_canonical()
+    }
+
+    /// Both endpoints at the same position: a zero-length VO, which a decoder rejects.
     pub fn is_degenerate(&self) -> bool {
-        self.x1 == self.x2 && self.y1 == self.y2
+        self.a.steps() == self.b.steps()
     }
 }
 
@@ -136,22 +254,21 @@ impl Frame {
         e1 + self.h0 * (pow_u8(self.h_ratio, level) - 1.0)
     }
 
-    /// Local coordinate of grid index `k` along an axis whose cell centre is `c`.
-    pub fn coord(&self, c: f64, k: u16) -> f64 {
-        c + (k as f64 - (QUANT_STEPS / 2) as f64) * self.quantum
-    }
-
     /// The geometry of a stored VO of cell `id` standing on ground level `ground`.
     pub fn dequantize(&self, id: CellId, ground: u8, q: &QVo) -> Option<VoGeom> {
         let c = self.cell_centre(id)?;
         let g = self.ground_z(ground);
         Some(VoGeom {
-            a: [self.coord(c[0], q.x1), self.coord(c[1], q.y1)],
-            b: [self.coord(c[0], q.x2), self.coord(c[1], q.y2)],
+            a: add(c, q.a.offset(self.quantum)),
+            b: add(c, q.b.offset(self.quantum)),
             g,
             h: self.vo_top(g + self.eye_hi, q.level),
         })
     }
+}
+
+fn add(c: [f64; 2], d: [f64; 2]) -> [f64; 2] {
+    [c[0] + d[0], c[1] + d[1]]
 }
 
 /// `r^k` by binary powering in plain IEEE operations: the bits `powi` gives when it runs
@@ -179,18 +296,116 @@ mod tests {
     #[test]
     fn qvo_bytes_round_trip_and_pin_the_bit_layout() {
         let q = QVo {
-            x1: 1,
-            y1: 2,
-            x2: 3,
-            y2: 511,
+            a: QPoint { e: 1, x: 2, y: 3 },
+            b: QPoint { e: 7, x: 511, y: 4 },
+            level: 31,
+        };
+        // 1 | 2<<3 | 3<<12 | (7 | 511<<3 | 4<<12)<<21 | 31<<42
+        let w: u64 = 1 | 2 << 3 | 3 << 12 | (7 | 511 << 3 | 4 << 12) << 21 | 31 << 42;
+        assert_eq!(q.to_bytes()[..], w.to_le_bytes()[..6]);
+        assert_eq!(q.to_bytes(), [0x11, 0x30, 0xe0, 0xff, 0x09, 0x7c]);
+        assert_eq!(QVo::from_bytes(q.to_bytes()), q);
+        assert!(!QVo::reserved_bit(q.to_bytes()));
+        for b in [
+            [0u8; 6],
+            [0xff, 0xff, 0xff, 0xff, 0xff, 0x7f],
+            [0x12, 0x34, 0x56, 0x78, 0x9a, 0x3c],
+        ] {
+            assert_eq!(QVo::from_bytes(b).to_bytes(), b);
+        }
+        assert!(QVo::reserved_bit([0, 0, 0, 0, 0, 0x80]));
+    }
+
+    #[test]
+    fn qvo_v1_bytes_round_trip_and_pin_the_bit_layout() {
+        let q = QVo {
+            a: QPoint::fine(1, 2),
+            b: QPoint::fine(3, 511),
             level: 15,
         };
         // 1 | 2<<9 | 3<<18 | 511<<27 | 15<<36
-        assert_eq!(q.to_bytes(), [0x01, 0x04, 0x0c, 0xf8, 0xff]);
-        assert_eq!(QVo::from_bytes(q.to_bytes()), q);
+        assert_eq!(q.to_bytes_v1(), [0x01, 0x04, 0x0c, 0xf8, 0xff]);
+        assert_eq!(QVo::from_bytes_v1(q.to_bytes_v1()), q);
         for b in [[0u8; 5], [0xff; 5], [0x12, 0x34, 0x56, 0x78, 0x9a]] {
-            assert_eq!(QVo::from_bytes(b).to_bytes(), b);
+            assert_eq!(QVo::from_bytes_v1(b).to_bytes_v1(), b);
+            assert!(QVo::from_bytes_v1(b).fits_v1());
         }
+    }
+
+    #[test]
+    fn every_position_has_one_canonical_point() {
+        // Every point of exponents 0..3 over a coarse lattice of mantissas: its canonical form
+        // holds the same position, and two canonical points are equal exactly when their
+        // positions are.
+        let mut seen = std::collections::HashMap::new();
+        for e in 0..3u8 {
+            for x in (0..512u16).step_by(7) {
+                for y in (0..512u16).step_by(11) {
+                    let p = QPoint { e, x, y };
+                    let c = p.canonical();
+                    assert!(c.in_range() && c.is_canonical());
+                    assert_eq!(c.steps(), p.steps());
+                    assert_eq!(c.offset(0.25), p.offset(0.25));
+                    if let Some(old) = seen.insert(p.steps(), c) {
+                        assert_eq!(old, c);
+                    }
+                }
+            }
+        }
+        assert!(!QPoint {
+            e: 1,
+            x: 128,
+            y: 383
+        }
+        .is_canonical());
+        assert!(QPoint {
+            e: 1,
+            x: 127,
+            y: 256
+        }
+        .is_canonical());
+        assert!(QPoint {
+            e: 1,
+            x: 256,
+            y: 384
+        }
+        .is_canonical());
+        // (-56, 44) steps of 4: (-112, 88) of 2, both under 128, so (-224, 176) of 1.
+        let p = |e, x, y| QPoint { e, x, y };
+        assert_eq!(p(2, 200, 300).canonical(), p(0, 32, 432));
+        // (-76, 44) of 4: (-152, 88) of 2, which is canonical.
+        assert_eq!(p(2, 180, 300).canonical(), p(1, 104, 344));
+    }
+
+    #[test]
+    fn endpoints_dequantize_exactly_at_every_exponent() {
+        let f = Frame {
+            origin: [0.0; 3],
+            grid: GridDescriptor {
+                min_x: 0.0,
+                min_y: 0.0,
+                cell_size: 100.0,
+                nx: 3,
+                ny: 3,
+            },
+            quantum: 0.25,
+            eye_lo: 1.5,
+            eye_hi: 2.0,
+            ground_z0: 0.0,
+            ground_step: 0.0,
+            h0: 2.0,
+            h_ratio: 1.25,
+        };
+        // Cell 4 is the centre one, centred at (150, 150).
+        let q = QVo {
+            a: QPoint { e: 0, x: 0, y: 511 },
+            b: QPoint { e: 7, x: 511, y: 0 },
+            level: 0,
+        };
+        let g = f.dequantize(4, 0, &q).unwrap();
+        assert_eq!(g.a, [150.0 - 64.0, 150.0 + 63.75]);
+        assert_eq!(g.b, [150.0 + 255.0 * 32.0, 150.0 - 256.0 * 32.0]);
+        assert_eq!(g.h, 2.0);
     }
 
     #[test]

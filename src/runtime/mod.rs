@@ -13,7 +13,7 @@
 //!
 //! ## Use
 //! ```
-//! use vocc::runtime::{encode_store, pvs, BoxTree, CellRecord, Frame, GridDescriptor, QVo, Store};
+//! use vocc::runtime::{encode_store, pvs, BoxTree, CellRecord, Frame, GridDescriptor, QPoint, QVo, Store};
 //!
 //! # fn main() -> Result<(), vocc::runtime::FormatError> {
 //! let frame = Frame {
@@ -28,7 +28,7 @@
 //!     h_ratio: 1.25,
 //! };
 //! // The bake writes the store: cell 0 has a 70 m wall 60 m north of its centre.
-//! let wall = QVo { x1: 196, y1: 376, x2: 336, y2: 376, level: 5 };
+//! let wall = QVo { a: QPoint::fine(196, 376), b: QPoint::fine(336, 376), level: 5 };
 //! let bytes = encode_store(&frame, &[CellRecord::new(0, &[wall])?, CellRecord::EMPTY])?;
 //!
 //! // The engine: parse once, build the tree once (boxes in the local frame, or
@@ -59,6 +59,6 @@ pub use format::{
     decode_blob, decode_frame, encode_blob, encode_frame, encode_store, validate_frame, CellRecord,
     FormatError, Store, VoList,
 };
-pub use frame::{CellView, Frame, QVo, VoGeom, MAX_VOS_PER_CELL};
+pub use frame::{CellView, Frame, QPoint, QVo, VoGeom, MAX_VOS_PER_CELL};
 pub use grid::{CellId, GridDescriptor};
 pub use occlusion::{Cover, PreparedVo};

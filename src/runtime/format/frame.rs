@@ -6,7 +6,7 @@
 //! encoders call [`validate_frame`].
 
 use super::{FormatError, Reader, FRAME_LEN, MAX_CELLS};
-use crate::runtime::frame::{Frame, HEIGHT_LEVELS};
+use crate::runtime::frame::{Frame, HEIGHT_LEVELS_V1};
 use crate::runtime::grid::GridDescriptor;
 
 /// Checks the frame rules F1..F12 of FORMAT.md section 4.1, in order.
@@ -56,7 +56,7 @@ pub fn validate_frame(f: &Frame) -> Result<(), FormatError> {
         far_x.is_finite() && far_y.is_finite(),
         "F11: the grid's far corner must be finite",
     )?;
-    let top = f.vo_top(f.ground_z(u8::MAX) + f.eye_hi, HEIGHT_LEVELS - 1);
+    let top = f.vo_top(f.ground_z(u8::MAX) + f.eye_hi, HEIGHT_LEVELS_V1 - 1);
     rule(top.is_finite(), "F12: the highest VO top must be finite")?;
     Ok(())
 }

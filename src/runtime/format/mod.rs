@@ -164,7 +164,7 @@ fn exact_length(expected: u64, got: u64) -> Result<(), FormatError> {
 
 #[cfg(test)]
 mod test_util {
-    use crate::runtime::frame::{Frame, QVo};
+    use crate::runtime::frame::{Frame, QPoint, QVo};
     use crate::runtime::grid::GridDescriptor;
 
     pub(super) fn frame(ground_step: f64, nx: u32, ny: u32) -> Frame {
@@ -189,10 +189,8 @@ mod test_util {
 
     pub(super) fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
         QVo {
-            x1,
-            y1,
-            x2,
-            y2,
+            a: QPoint::fine(x1, y1),
+            b: QPoint::fine(x2, y2),
             level,
         }
     }

@@ -11,14 +11,12 @@ use std::fmt;
 use std::ops::Deref;
 
 use super::{FormatError, Reader, SKIPPED, VO_BYTES};
-use crate::runtime::frame::{QVo, HEIGHT_LEVELS, MAX_VOS_PER_CELL, QUANT_STEPS};
+use crate::runtime::frame::{QPoint, QVo, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
 
 const NO_VO: QVo = QVo {
-    x1: 0,
-    y1: 0,
-    x2: 0,
-    y2: 0,
+    a: QPoint::fine(0, 0),
+    b: QPoint::fine(0, 0),
     level: 0,
 };
 
@@ -182,7 +180,7 @@ pub(super) fn read_record(
     };
     let mut vos = VoList::new();
     for k in 0..n {
-        let q = QVo::from_bytes(r.take::<VO_BYTES>().ok_or_else(short)?);
+        let q = QVo::from_bytes_v1(r.take::<VO_BYTES>().ok_or_else(short)?);
         if q.is_degenerate() {
             return Err(FormatError::DegenerateVo {
                 cell,
@@ -214,7 +212,7 @@ pub(super) fn check_record(
     }
     for (k, q) in vos.iter().enumerate() {
         let k8 = k as u8;
-        if [q.x1, q.y1, q.x2, q.y2].iter().any(|&c| c >= QUANT_STEPS) || q.level >= HEIGHT_LEVELS {
+        if !q.fits_v1() || !q.in_range() {
             return Err(FormatError::VoOutOfRange { cell, vo: k8 });
         }
         if q.is_degenerate() {
@@ -235,7 +233,7 @@ pub(super) fn push_record(out: &mut Vec<u8>, rec: &CellRecord, ground_byte: bool
                 out.push(*ground);
             }
             for q in vos.iter() {
-                out.extend_from_slice(&q.to_bytes());
+                out.extend_from_slice(&q.to_bytes_v1());
             }
         }
     }
