@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::DVec2;
-use vocc::bake::umbra::{grow_cell, GrowParams};
+use vocc::bake::growth::umbra::{grow_cell, GrowParams};
 use vocc::scene::{self, ReadOptions};
 
 fn pct(v: &mut [f64], p: f64) -> f64 {

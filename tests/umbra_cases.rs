@@ -7,8 +7,9 @@ use crate::common;
 
 use common::{brute_hidden, dyadic_points};
 use glam::DVec2;
-use vocc::bake::umbra::{grow_cell, CellVos, GrowParams};
-use vocc::bake::{svg, BlockerSet};
+use vocc::bake::growth::svg;
+use vocc::bake::growth::umbra::{grow_cell, CellVos, GrowParams};
+use vocc::bake::BlockerSet;
 
 fn v(x: f64, y: f64) -> DVec2 {
     DVec2::new(x, y)
@@ -173,7 +174,7 @@ fn paper_fig3_staggered_fusion() {
     assert!(!out.vos.iter().any(|v| v.chain == vec![1, 0]));
     // Grown from the paper's seed, object 3 joins before object 2.
     let set = BlockerSet::new(blockers.clone(), vec![20.0; 3]);
-    let (_, t) = vocc::bake::umbra::grow_seed(&cell(), &set, &GrowParams::default(), 0);
+    let (_, t) = vocc::bake::growth::umbra::grow_seed(&cell(), &set, &GrowParams::default(), 0);
     let when = |id: u32| t.steps.iter().position(|s| s.chain.contains(&id));
     assert!(when(2).unwrap() < when(1).unwrap(), "{:?}", t.steps);
     // Without object 3, objects 2 and the seed do not fuse.

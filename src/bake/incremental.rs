@@ -10,11 +10,11 @@
 //! only objects (their boxes, costs and blockers) whose bounding box meets the square
 //! `centre(c) ± Plan::reach()`, in index order:
 //! - the inside test and the growth's blockers are R-tree queries within `cell ± search_m`
-//!   (`umbra::usable`; rays in the growth are filtered to those), the ground level within
+//!   (`growth::umbra::usable`; rays in the growth are filtered to those), the ground level within
 //!   `cell ± 50 m`, or a wider square up to `cell ± search_m` when that one holds no blocker,
 //!   every blocker lying inside its object's box;
 //! - the occludee weights come from boxes meeting the umbra box, clamped to
-//!   `centre ± reach` (`decimate::Occludees::hidden`);
+//!   `centre ± reach` (`occludees::Occludees::hidden`);
 //! - ids enter only through comparisons and sorting, so only their relative order matters, and
 //!   an edit elsewhere in the file does not change a cell's hash.
 //!

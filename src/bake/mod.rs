@@ -14,18 +14,16 @@
 
 pub mod budget;
 pub mod certify;
-pub mod decimate;
+pub mod growth;
 pub mod hidden;
 pub mod incremental;
 pub mod job;
+pub mod occludees;
 pub mod pipeline;
 pub mod propose;
 pub mod quantize;
-pub mod seed;
 pub mod select;
 pub mod slice;
-pub mod svg;
-pub mod umbra;
 
 use glam::DVec2;
 use rstar::primitives::{GeomWithData, Rectangle};

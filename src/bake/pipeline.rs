@@ -17,11 +17,11 @@ use std::time::Instant;
 use glam::DVec2;
 use rayon::prelude::*;
 
-use super::decimate::{greedy, Occludees};
+use super::growth::decimate::greedy;
+use super::growth::umbra::{self, CellGrower, GrowParams};
+use super::occludees::Occludees;
 use super::quantize::{clip, quantize, window, Refused};
-use super::seed::area_angle;
-use super::slice::{choose_levels, d_near, Support};
-use super::umbra::{self, CellGrower, GrowParams};
+use super::slice::{area_angle, choose_levels, d_near, Support};
 use super::BlockerSet;
 use crate::geom::predicates::{point_in_convex, Containment};
 use crate::geom::verify::Verifier;

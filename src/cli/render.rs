@@ -40,9 +40,9 @@ pub fn render_debug(
     let set = vocc::bake::slice_blockers(&s, z);
     let cell = vocc::bake::grid_cell(&s, local, cell_size);
     let t = Instant::now();
-    let out = vocc::bake::umbra::grow_cell(&cell, &set, &Default::default());
+    let out = vocc::bake::growth::umbra::grow_cell(&cell, &set, &Default::default());
     let ms = t.elapsed().as_secs_f64() * 1e3;
-    let svg = vocc::bake::svg::render(&cell, &set, &out, 0.1 * cell_size);
+    let svg = vocc::bake::growth::svg::render(&cell, &set, &out, 0.1 * cell_size);
     write_atomically(output, |w| w.write_all(svg.as_bytes()))?;
     eprintln!(
         "cell at ({:.1}, {:.1}) world, slice z = {:.1} m: {} blockers in the slice, {} seeds, {} dense VOs, {} rejected by the verifier, {ms:.1} ms; wrote {}",

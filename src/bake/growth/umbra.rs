@@ -79,7 +79,8 @@ type HashSet<K> = StdHashSet<K, BuildHasherDefault<FastHasher>>;
 
 use glam::DVec2;
 
-use super::{bounds, seed, BlockerSet};
+use super::seed;
+use crate::bake::{bounds, BlockerSet};
 use crate::geom::predicates::{
     common_tangents, convex_interiors_disjoint, orient, point_in_convex, segment_meets_convex,
     set_side, CommonTangents, Containment, Orientation, SetSide,

@@ -1,0 +1,6 @@
+//! The growth generator (`--generator growth`).
+
+pub mod decimate;
+pub mod seed;
+pub mod svg;
+pub mod umbra;
