@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use glam::DVec2;
 use vocc::bake::growth::umbra::{grow_cell, GrowParams};
+use vocc::bake::params::SEARCH_M;
 use vocc::scene::{self, ReadOptions};
 
 fn pct(v: &mut [f64], p: f64) -> f64 {
@@ -69,7 +70,7 @@ fn main() {
                     DVec2::new(x0, y0 + size),
                 ];
                 let t = Instant::now();
-                let out = grow_cell(&cell, &set, &params);
+                let out = grow_cell(&cell, &set, &params, SEARCH_M);
                 times.push(t.elapsed().as_secs_f64() * 1e3);
                 counts.push(out.vos.len() as f64);
                 lens.extend(out.vos.iter().map(|v| v.length()));

@@ -23,7 +23,8 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::incremental::{CellHashes, HashesError};
-use super::pipeline::{bake_cells, records, BakeError, BakeParams, CellBake, Plan};
+use super::params::BakeParams;
+use super::pipeline::{bake_cells, records, BakeError, CellBake, Plan};
 use crate::runtime::crc::crc32;
 use crate::runtime::format::{encode_frame, encode_store, CellRecord, FormatError, Store};
 use crate::runtime::grid::CellId;

@@ -19,6 +19,7 @@ pub mod hidden;
 pub mod incremental;
 pub mod job;
 pub mod occludees;
+pub mod params;
 pub mod pipeline;
 pub mod propose;
 pub mod quantize;

@@ -18,8 +18,9 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::growth::decimate::greedy;
-use super::growth::umbra::{self, CellGrower, GrowParams};
+use super::growth::umbra::{self, CellGrower};
 use super::occludees::Occludees;
+use super::params::{BakeParams, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
 use super::quantize::{clip, quantize, window, Refused};
 use super::slice::{area_angle, choose_levels, d_near, Support};
 use super::BlockerSet;
@@ -34,7 +35,7 @@ use crate::scene::Scene;
 pub const GROUND_STEP_M: f64 = 0.25;
 /// Blockers within this distance of a cell decide its ground, metres. When none stands that
 /// near (a square, a field, the water beside a city), the radius doubles until some blocker is
-/// within it, up to the search radius of the VOs' blockers (`GrowParams::search_m`): the cell
+/// within it, up to the search radius of the VOs' blockers (`BakeParams::search_m`): the cell
 /// then stands on the ground of the nearest buildings, not on the scene's lowest.
 pub const GROUND_RADIUS_M: f64 = 50.0;
 /// The cell's ground is this percentile of the bases of the blockers near it, so that most of
@@ -45,134 +46,6 @@ pub const H0_M: f64 = 2.0;
 pub const H_RATIO: f64 = 1.25;
 /// Height levels tried for one VO before it is dropped: its own, then each lower one.
 pub const LEVEL_FALLBACKS: usize = 3;
-/// The smallest view cell, metres. VO endpoints lie on a grid of at least 2 m at the default
-/// search distance, so smaller cells give no finer occluders, only many more cells to bake.
-pub const MIN_CELL_SIZE_M: f64 = 1.0;
-/// The largest view cell, metres.
-pub const MAX_CELL_SIZE_M: f64 = 1e5;
-
-/// How many slices a cell gets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Slices {
-    /// Up to 5, fewer when the heights around the cell do not spread over 5 levels.
-    Auto,
-    Fixed(u8),
-}
-
-/// What the bake is asked for.
-#[derive(Clone, Debug)]
-pub struct BakeParams {
-    /// Side of a view cell, metres.
-    pub cell_size: f64,
-    /// Eye heights above the ground, metres.
-    pub eye: (f64, f64),
-    pub slices: Slices,
-    pub max_vos: usize,
-    /// Bake only the cells meeting this local rectangle `[x0, y0, x1, y1]` (the grid still covers
-    /// the whole scene).
-    pub region: Option<[f64; 4]>,
-    /// Bake only the cells meeting this walkable area (outer rings, local frame).
-    pub walkable: Option<crate::scene::walkable::Area>,
-    pub grow: GrowParams,
-    /// Which generator proposes the VOs.
-    pub generator: Generator,
-    /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres.
-    pub weigh_m: f64,
-    /// The long generator's sampled visibility and line scan.
-    pub map: super::hidden::MapParams,
-    pub propose: super::propose::ProposeParams,
-    /// Exact certifications the long generator's selection may run per cell ([`super::select`]).
-    pub budget: usize,
-}
-
-/// How hard the long generator looks, from fast to tight: how many eyes sample the cell's
-/// boundary, how many runs per direction are proposed, how many certifications a cell may run.
-/// Every setting is as safe as the others (only the exact verifier decides what is stored);
-/// they trade bake time for culled share (docs/RESULTS.md, "Speed against culling").
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Effort {
-    Fast,
-    #[default]
-    Default,
-    Tight,
-}
-
-impl Effort {
-    /// The parameters of this effort, over `p`.
-    pub fn apply(self, p: &mut BakeParams) {
-        let (eyes, per_direction, budget) = match self {
-            Effort::Fast => (1, 1, 12),
-            Effort::Default => (3, 1, 25),
-            Effort::Tight => (7, 2, 60),
-        };
-        p.map.edge_eyes = eyes;
-        p.propose.per_direction = per_direction;
-        p.budget = budget;
-    }
-}
-
-/// Which generator proposes a cell's VOs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Generator {
-    /// Aggregate umbrae grown from seeds (paper 002, section 3).
-    Growth,
-    /// Long hidden runs of lines from sampled from-region visibility ([`super::propose`]).
-    Long,
-}
-
-impl Default for BakeParams {
-    fn default() -> Self {
-        BakeParams {
-            cell_size: 100.0,
-            eye: (1.5, 2.0),
-            slices: Slices::Auto,
-            max_vos: MAX_VOS_PER_CELL,
-            region: None,
-            walkable: None,
-            grow: GrowParams {
-                verify: false,
-                ..GrowParams::default()
-            },
-            generator: Generator::Long,
-            weigh_m: 1000.0,
-            map: super::hidden::MapParams::default(),
-            propose: super::propose::ProposeParams::default(),
-            budget: 0,
-        }
-        .with_effort(Effort::Default)
-    }
-}
-
-impl std::str::FromStr for Effort {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Effort, String> {
-        match s {
-            "fast" => Ok(Effort::Fast),
-            "default" => Ok(Effort::Default),
-            "tight" => Ok(Effort::Tight),
-            _ => Err(format!("expected fast, default or tight, got {s:?}")),
-        }
-    }
-}
-
-impl std::str::FromStr for Generator {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Generator, String> {
-        match s {
-            "long" => Ok(Generator::Long),
-            "growth" => Ok(Generator::Growth),
-            _ => Err(format!("expected long or growth, got {s:?}")),
-        }
-    }
-}
-
-impl BakeParams {
-    /// These parameters with the long generator's settings of `effort`.
-    pub fn with_effort(mut self, effort: Effort) -> BakeParams {
-        effort.apply(&mut self);
-        self
-    }
-}
 
 /// Why a bake cannot start.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -305,7 +178,7 @@ impl<'s> Plan<'s> {
                 pow2_at_least(((bmax - bmin) / 255.0).max(GROUND_STEP_M)),
             )
         };
-        let quantum = pow2_at_least((0.5 * size + params.grow.search_m) / (QUANT_STEPS / 2) as f64);
+        let quantum = pow2_at_least((0.5 * size + params.search_m) / (QUANT_STEPS / 2) as f64);
         let frame = Frame {
             origin: scene.origin.to_array(),
             grid: GridDescriptor {
@@ -351,7 +224,7 @@ impl<'s> Plan<'s> {
     /// How far from a cell's centre its bake reads the scene (metres, per axis): the growth's
     /// search distance past the cell, and the occludees weighed within this distance.
     pub fn reach(&self) -> f64 {
-        (self.params.grow.search_m + self.frame.grid.cell_size).max(self.params.weigh_m)
+        (self.params.search_m + self.frame.grid.cell_size).max(self.params.weigh_m)
     }
 
     /// The cells to bake, ascending: those meeting the region and the walkable area, when
@@ -395,7 +268,7 @@ impl<'s> Plan<'s> {
         let mut bases: Vec<f64> = Vec::new();
         // Within the cell's reach (ARCHITECTURE.md invariant 13): `cell ± search_m` lies in
         // `centre ± (search_m + cell size)`.
-        while bases.is_empty() && radius <= self.params.grow.search_m.max(GROUND_RADIUS_M) {
+        while bases.is_empty() && radius <= self.params.search_m.max(GROUND_RADIUS_M) {
             let r = DVec2::splat(radius);
             bases = self
                 .set
@@ -443,7 +316,7 @@ impl<'s> Plan<'s> {
         }
         // Blockers that may support a VO: near, apart from the cell, standing from below the
         // lowest eye (rule 2: base <= e0 - lambda (e0 - g)) to above the eyes.
-        let near: Vec<u32> = umbra::usable(&cell, &self.set, &self.params.grow)
+        let near: Vec<u32> = umbra::usable(&cell, &self.set, self.params.search_m)
             .into_iter()
             .filter(|&i| self.base[i as usize] <= e0 && self.top[i as usize] > e1)
             .collect();
@@ -481,7 +354,7 @@ impl<'s> Plan<'s> {
         let radius = self.reach();
         let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
         let mut hidden: Vec<Vec<u32>> = Vec::new();
-        let mut grower = CellGrower::new(&cell, &self.set, &self.params.grow);
+        let mut grower = CellGrower::new(&cell, &self.set, &self.params.grow, self.params.search_m);
         let win = {
             let (lo, hi) = window(f, centre);
             let step = DVec2::splat(f.quantum);

@@ -100,8 +100,6 @@ pub const QUERY_STEP_M: f64 = 25.0;
 pub struct GrowParams {
     /// Seeds ranked by area-angle (the direction rule may add more).
     pub seeds: usize,
-    /// How far the active lines are followed from the cell, metres.
-    pub search_m: f64,
     /// Longest chain.
     pub max_chain: usize,
     /// Bridges (case 2) in a row on one side.
@@ -123,7 +121,6 @@ impl Default for GrowParams {
     fn default() -> Self {
         GrowParams {
             seeds: 8,
-            search_m: 900.0,
             max_chain: 24,
             max_bridges: 2,
             tries: 6,
@@ -228,6 +225,8 @@ struct Grower<'a> {
     centre: DVec2,
     set: &'a BlockerSet,
     params: &'a GrowParams,
+    /// How far the active lines are followed from the cell, metres.
+    search_m: f64,
     usable: HashSet<u32>,
     cell_tangents: HashMap<u32, CommonTangents>,
     pair_tangents: HashMap<(u32, u32), CommonTangents>,
@@ -506,12 +505,12 @@ impl<'a> Grower<'a> {
         if d == DVec2::ZERO {
             return Vec::new();
         }
-        let end = a + d * self.params.search_m;
-        let steps = (self.params.search_m / QUERY_STEP_M).ceil() as usize;
+        let end = a + d * self.search_m;
+        let steps = (self.search_m / QUERY_STEP_M).ceil() as usize;
         let mut out: Vec<u32> = Vec::new();
         for s in 0..steps {
             let p = a + d * (s as f64 * QUERY_STEP_M);
-            let q = a + d * (((s + 1) as f64 * QUERY_STEP_M).min(self.params.search_m));
+            let q = a + d * (((s + 1) as f64 * QUERY_STEP_M).min(self.search_m));
             self.set.each_in_box(p.min(q), p.max(q), |id| {
                 if !out.contains(&id) && segment_meets_convex(a, end, self.poly(id)) {
                     out.push(id);
@@ -725,10 +724,10 @@ fn clip_snap(planes: &[HalfPlane], o: DVec2, dir: DVec2) -> Option<(DVec2, DVec2
     None
 }
 
-/// The blockers the growth of a cell may use: within the search distance, not overlapping it.
-pub fn usable(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> Vec<u32> {
+/// The blockers the growth of a cell may use: within `search_m` (metres), not overlapping it.
+pub fn usable(cell: &[DVec2], set: &BlockerSet, search_m: f64) -> Vec<u32> {
     let (lo, hi) = bounds(cell);
-    let r = DVec2::splat(params.search_m);
+    let r = DVec2::splat(search_m);
     let mut near: Vec<u32> = set
         .in_box(lo - r, hi + r)
         .filter(|&id| convex_interiors_disjoint(&set.polys[id as usize], cell))
@@ -741,6 +740,7 @@ fn grower<'a>(
     cell: &'a [DVec2],
     set: &'a BlockerSet,
     params: &'a GrowParams,
+    search_m: f64,
     near: &[u32],
 ) -> Grower<'a> {
     Grower {
@@ -748,6 +748,7 @@ fn grower<'a>(
         centre: cell.iter().copied().sum::<DVec2>() / cell.len() as f64,
         set,
         params,
+        search_m,
         usable: near.iter().copied().collect(),
         cell_tangents: HashMap::default(),
         pair_tangents: HashMap::default(),
@@ -757,20 +758,23 @@ fn grower<'a>(
     }
 }
 
-/// Grows from one given seed (for tests and pictures); the VOs are not yet verified.
+/// Grows from one given seed (for tests and pictures), over the blockers within `search_m`
+/// (metres); the VOs are not yet verified.
 pub fn grow_seed(
     cell: &[DVec2],
     set: &BlockerSet,
     params: &GrowParams,
+    search_m: f64,
     seed: u32,
 ) -> (Vec<Vo>, SeedTrace) {
-    let near = usable(cell, set, params);
-    grower(cell, set, params, &near).grow(seed)
+    let near = usable(cell, set, search_m);
+    grower(cell, set, params, search_m, &near).grow(seed)
 }
 
-/// Grows the dense VO set of one cell and passes it through the exact verifier.
-pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellVos {
-    CellGrower::new(cell, set, params).grow(&usable(cell, set, params))
+/// Grows the dense VO set of one cell over the blockers within `search_m` (metres) and passes it
+/// through the exact verifier.
+pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams, search_m: f64) -> CellVos {
+    CellGrower::new(cell, set, params, search_m).grow(&usable(cell, set, search_m))
 }
 
 /// The growth of one cell over several blocker subsets (the slices), sharing the tangents and
@@ -778,8 +782,14 @@ pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellV
 pub struct CellGrower<'a>(Grower<'a>);
 
 impl<'a> CellGrower<'a> {
-    pub fn new(cell: &'a [DVec2], set: &'a BlockerSet, params: &'a GrowParams) -> Self {
-        CellGrower(grower(cell, set, params, &[]))
+    /// The growth of `cell`, its active lines followed `search_m` metres.
+    pub fn new(
+        cell: &'a [DVec2],
+        set: &'a BlockerSet,
+        params: &'a GrowParams,
+        search_m: f64,
+    ) -> Self {
+        CellGrower(grower(cell, set, params, search_m, &[]))
     }
 
     /// The dense set over blockers `near_sorted` (sorted ids, none overlapping the cell).
