@@ -9,7 +9,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::DVec2;
-use vocc::bake::growth::umbra::{grow_cell, GrowParams};
+use vocc::bake::growth::dense::grow_cell;
+use vocc::bake::growth::GrowParams;
 use vocc::bake::params::SEARCH_M;
 use vocc::scene::{self, ReadOptions};
 

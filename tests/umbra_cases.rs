@@ -7,8 +7,9 @@ use crate::common;
 
 use common::{brute_hidden, dyadic_points};
 use glam::DVec2;
+use vocc::bake::growth::dense::{grow_cell, CellVos};
 use vocc::bake::growth::svg;
-use vocc::bake::growth::umbra::{grow_cell, CellVos, GrowParams};
+use vocc::bake::growth::GrowParams;
 use vocc::bake::params::SEARCH_M;
 use vocc::bake::BlockerSet;
 
@@ -176,7 +177,7 @@ fn paper_fig3_staggered_fusion() {
     // Grown from the paper's seed, object 3 joins before object 2.
     let set = BlockerSet::new(blockers.clone(), vec![20.0; 3]);
     let (_, t) =
-        vocc::bake::growth::umbra::grow_seed(&cell(), &set, &GrowParams::default(), SEARCH_M, 0);
+        vocc::bake::growth::dense::grow_seed(&cell(), &set, &GrowParams::default(), SEARCH_M, 0);
     let when = |id: u32| t.steps.iter().position(|s| s.chain.contains(&id));
     assert!(when(2).unwrap() < when(1).unwrap(), "{:?}", t.steps);
     // Without object 3, objects 2 and the seed do not fuse.

@@ -10,7 +10,7 @@
 //! only objects (their boxes, costs and blockers) whose bounding box meets the square
 //! `centre(c) ± Plan::reach()`, in index order:
 //! - the inside test and the growth's blockers are R-tree queries within `cell ± search_m`
-//!   (`growth::umbra::usable`; rays in the growth are filtered to those), the ground level within
+//!   (`cell::usable`; rays in the growth are filtered to those), the ground level within
 //!   `cell ± 50 m`, or a wider square up to `cell ± search_m` when that one holds no blocker,
 //!   every blocker lying inside its object's box;
 //! - the occludee weights come from boxes meeting the umbra box, clamped to
@@ -27,9 +27,9 @@
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
-use super::growth::umbra::GrowParams;
+use super::growth::GrowParams;
 use super::params::BakeParams;
-use super::pipeline::Plan;
+use super::plan::Plan;
 use crate::runtime::format::encode_frame;
 use crate::runtime::grid::CellId;
 

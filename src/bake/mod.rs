@@ -13,14 +13,16 @@
 //! dequantized form; a VO that fails is shrunk or dropped and counted.
 
 pub mod budget;
+pub mod cell;
 pub mod certify;
 pub mod growth;
 pub mod hidden;
 pub mod incremental;
 pub mod job;
+pub mod long;
 pub mod occludees;
 pub mod params;
-pub mod pipeline;
+pub mod plan;
 pub mod propose;
 pub mod quantize;
 pub mod select;

@@ -9,7 +9,7 @@
 //! without changing the `.hashes` file's global hash (`super::incremental` hashes all of them, in
 //! a fixed layout); the defaults are what `vocc bake` bakes with no option.
 
-use super::growth::umbra::GrowParams;
+use super::growth::GrowParams;
 use crate::runtime::frame::MAX_VOS_PER_CELL;
 
 /// The smallest view cell, metres. VO endpoints lie on a grid of at least 2 m at the default

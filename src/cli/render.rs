@@ -40,7 +40,7 @@ pub fn render_debug(
     let set = vocc::bake::slice_blockers(&s, z);
     let cell = vocc::bake::grid_cell(&s, local, cell_size);
     let t = Instant::now();
-    let out = vocc::bake::growth::umbra::grow_cell(
+    let out = vocc::bake::growth::dense::grow_cell(
         &cell,
         &set,
         &Default::default(),
@@ -104,7 +104,7 @@ pub fn render_store(
         ..Default::default()
     };
     params.grow.single_object = true;
-    let plan = vocc::bake::pipeline::Plan::new(&s, params)?;
+    let plan = vocc::bake::plan::Plan::new(&s, params)?;
     let base_rec = plan.bake_cell(id).record;
     let mut base_visible = Vec::new();
     vocc::runtime::culler::pvs(&plan.frame, id, &base_rec, &tree, &mut base_visible);

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use crate::bake::job::BakeJob;
 use crate::bake::params::{BakeParams, Effort, Generator, Slices};
-use crate::bake::pipeline::{CellBake, Plan};
+use crate::bake::plan::{CellBake, Plan};
 use crate::runtime::culler::BoxTree;
 use crate::runtime::format::{encode_store, CellRecord, Store};
 use crate::runtime::CellId;

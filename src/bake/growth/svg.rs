@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use glam::DVec2;
 
-use super::umbra::CellVos;
+use super::dense::CellVos;
 use crate::bake::{bounds, BlockerSet};
 
 /// Renders the cell, its growth trace and VOs, and the blockers around them. The frame holds
