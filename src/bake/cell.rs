@@ -1,11 +1,11 @@
 //! One cell's setup, what both generators start from, and the record they end with.
 //!
-//! Input: the [`Plan`] and a cell id. Output: a [`CellSetup`]: the cell's polygon, ground level
+//! Input: the [`Plan`] and a cell id. Output: a `CellSetup`: the cell's polygon, ground level
 //! and eyes ([`CellView`]), the blockers near it that may support its VOs with their rule-2
 //! [`Support`] and their adjusted heights and weights, the VO top of every height level, and
 //! the slice levels ([`choose_levels`]); or, for a cell no generator needs to see, its record:
 //! empty (no blocker that may support a VO) or skipped (wholly inside a blocker standing above
-//! the eyes). [`usable`] is the blocker query both generators use; [`CellSetup::finish`] turns
+//! the eyes). [`usable`] is the blocker query both generators use; `CellSetup::finish` turns
 //! the VOs a generator picked into the cell's record.
 //! Invariants: a cell's setup reads only the blockers whose boxes meet `cell ± search_m` (within
 //! the reach, ARCHITECTURE.md invariant 13) and compares ids only; `near` is ascending, and

@@ -9,7 +9,7 @@
 //! Invariant (what makes reuse exact): the bake of cell `c` reads the frame, the options, and
 //! only objects (their boxes, costs and blockers) whose bounding box meets the square
 //! `centre(c) ± Plan::reach()`, in index order:
-//! - the inside test and the growth's blockers are R-tree queries within `cell ± search_m`
+//! - the inside test and both generators' blockers are R-tree queries within `cell ± search_m`
 //!   (`cell::usable`; rays in the growth are filtered to those), the ground level within
 //!   `cell ± 50 m`, or a wider square up to `cell ± search_m` when that one holds no blocker,
 //!   every blocker lying inside its object's box;

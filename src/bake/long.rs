@@ -1,14 +1,14 @@
 //! The long generator (the default, `--generator long`): one cell's VOs from the long hidden
 //! runs of lines around it.
 //!
-//! Input: the [`Plan`] and a cell's [`CellSetup`] (its near blockers with their rule-2 support,
+//! Input: the [`Plan`] and a cell's `CellSetup` (its near blockers with their rule-2 support,
 //! the height levels and the slice levels). Output: the cell's record, at most `max_vos` stored
 //! VOs, most effective first, and what it took in [`CellStats`].
 //! Per cell: per slice, the boundary edges of the blockers tall enough ([`super::hidden`]'s
 //! `EdgeTwins`), the sampled hidden maps of all slices in one pass ([`super::hidden`]), the
 //! long hidden runs on them ([`super::propose`]), each weighed by rule 3 against the occludees
-//! and [`trim`]med to the part those need; then lazy greedy selection ([`super::select`]) that
-//! certifies ([`super::certify`]) only what it is about to pick.
+//! and trimmed (`trim`) to the part those need; then lazy greedy selection
+//! ([`super::select`]) that certifies ([`super::certify`]) only what it is about to pick.
 //! Invariants: the hidden maps and proposals are sampled and decide nothing: a stored VO is what
 //! the exact verifier certified over its rule-2 supporters, quantized and certified again in its
 //! dequantized form (ARCHITECTURE.md invariant 7); at most `budget` certifications per cell;

@@ -1,7 +1,7 @@
 //! The growth generator (`--generator growth`, the default before 0.2, kept as a measured
 //! baseline): aggregate umbrae grown from single buildings (paper 002, section 3).
 //!
-//! Input: the [`Plan`] and a cell's [`CellSetup`] (its near blockers with their rule-2 support
+//! Input: the [`Plan`] and a cell's `CellSetup` (its near blockers with their rule-2 support
 //! and adjusted heights, the height levels and the slice levels), [`GrowParams`] and the shared
 //! `search_m`. Output: the cell's record, at most `max_vos` stored VOs, most effective first,
 //! and what it took in [`CellStats`].
