@@ -7,6 +7,10 @@
 //! with both endpoints on a 2^-10 m grid and hidden from the whole cell, and the growth trace for
 //! pictures ([`SeedTrace`]). The dense set over all seeds, and the verifier's gate, are
 //! [`super::dense`]'s.
+//! Invariants: every VO lies in its chain's certified region, both snapped ends checked exactly
+//! (below); the caches are keyed by blocker ids and coordinate bits and only looked up, so the
+//! output does not depend on their order; chains hold only the blockers given as usable, found
+//! along the active lines no farther than `search_m`.
 //!
 //! ## Growth
 //! From each seed a chain `K = (B_1, .., B_m)` of blockers grows, ordered left to right as seen
