@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use vocc::bake::job::BakeJob;
-use vocc::bake::pipeline::BakeParams;
+use vocc::bake::params::BakeParams;
 use vocc::scene::{self, ReadOptions};
 
 fn pct(v: &[f64], p: f64) -> f64 {

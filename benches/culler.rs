@@ -13,7 +13,7 @@
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use vocc::bake::pipeline::BakeParams;
+use vocc::bake::params::BakeParams;
 use vocc::eval::metrics::object_boxes;
 use vocc::eval::report::bake;
 use vocc::runtime::culler::{pvs, pvs_with_stats, BoxTree};

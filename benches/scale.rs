@@ -18,7 +18,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use vocc::bake::job::BakeJob;
-use vocc::bake::pipeline::BakeParams;
+use vocc::bake::params::BakeParams;
 use vocc::scene::gencity::{generate, write_geojson, CityParams};
 use vocc::scene::{self, ReadOptions};
 

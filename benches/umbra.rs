@@ -9,7 +9,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::DVec2;
-use vocc::bake::umbra::{grow_cell, GrowParams};
+use vocc::bake::growth::dense::grow_cell;
+use vocc::bake::growth::GrowParams;
+use vocc::bake::params::SEARCH_M;
 use vocc::scene::{self, ReadOptions};
 
 fn pct(v: &mut [f64], p: f64) -> f64 {
@@ -69,7 +71,7 @@ fn main() {
                     DVec2::new(x0, y0 + size),
                 ];
                 let t = Instant::now();
-                let out = grow_cell(&cell, &set, &params);
+                let out = grow_cell(&cell, &set, &params, SEARCH_M);
                 times.push(t.elapsed().as_secs_f64() * 1e3);
                 counts.push(out.vos.len() as f64);
                 lens.extend(out.vos.iter().map(|v| v.length()));

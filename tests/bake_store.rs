@@ -6,7 +6,7 @@
 use crate::common;
 
 use common::{check_stored_vos, load_lyon};
-use vocc::bake::pipeline::{BakeParams, Generator};
+use vocc::bake::params::{BakeParams, Generator};
 use vocc::eval::report::bake;
 use vocc::runtime::format::Store;
 use vocc::scene::Scene;

@@ -21,7 +21,7 @@ use common::{lyon_options, repo, temp_dir, LYON};
 use serde_json::Value;
 use vocc::bake::incremental::hashes_path;
 use vocc::bake::job::BakeJob;
-use vocc::bake::pipeline::{BakeParams, Effort};
+use vocc::bake::params::{BakeParams, Effort};
 use vocc::runtime::format::Store;
 use vocc::runtime::grid::CellId;
 use vocc::scene::{self, Scene};

@@ -7,8 +7,11 @@ use crate::common;
 
 use common::{brute_hidden, dyadic_points};
 use glam::DVec2;
-use vocc::bake::umbra::{grow_cell, CellVos, GrowParams};
-use vocc::bake::{svg, BlockerSet};
+use vocc::bake::growth::dense::{grow_cell, CellVos};
+use vocc::bake::growth::svg;
+use vocc::bake::growth::GrowParams;
+use vocc::bake::params::SEARCH_M;
+use vocc::bake::BlockerSet;
 
 fn v(x: f64, y: f64) -> DVec2 {
     DVec2::new(x, y)
@@ -67,7 +70,7 @@ fn run_checked(
         .map(|b| b.iter().map(|p| *p + o).collect())
         .collect();
     let set = BlockerSet::new(blockers.clone(), vec![20.0; blockers.len()]);
-    let out = grow_cell(&cell, &set, &GrowParams::default());
+    let out = grow_cell(&cell, &set, &GrowParams::default(), SEARCH_M);
     assert_verifier_cuts_little(name, off, &cell, &blockers, &out);
     for vo in &out.vos {
         for q in dyadic_points(vo.a, vo.b, levels) {
@@ -125,7 +128,7 @@ fn best_single(cell: &[DVec2], blockers: &[Vec<DVec2>]) -> f64 {
         .iter()
         .map(|b| {
             let set = BlockerSet::new(vec![b.clone()], vec![20.0]);
-            longest(&grow_cell(cell, &set, &GrowParams::default()))
+            longest(&grow_cell(cell, &set, &GrowParams::default(), SEARCH_M))
         })
         .fold(0.0, f64::max)
 }
@@ -173,7 +176,8 @@ fn paper_fig3_staggered_fusion() {
     assert!(!out.vos.iter().any(|v| v.chain == vec![1, 0]));
     // Grown from the paper's seed, object 3 joins before object 2.
     let set = BlockerSet::new(blockers.clone(), vec![20.0; 3]);
-    let (_, t) = vocc::bake::umbra::grow_seed(&cell(), &set, &GrowParams::default(), 0);
+    let (_, t) =
+        vocc::bake::growth::dense::grow_seed(&cell(), &set, &GrowParams::default(), SEARCH_M, 0);
     let when = |id: u32| t.steps.iter().position(|s| s.chain.contains(&id));
     assert!(when(2).unwrap() < when(1).unwrap(), "{:?}", t.steps);
     // Without object 3, objects 2 and the seed do not fuse.
@@ -371,7 +375,7 @@ fn contiguous_row_gives_a_vo_along_it() {
         DVec2::new(0.0, 100.0),
     ];
     let set = BlockerSet::new(row.clone(), vec![20.0; row.len()]);
-    let out = grow_cell(&cell, &set, &GrowParams::default());
+    let out = grow_cell(&cell, &set, &GrowParams::default(), SEARCH_M);
     assert_verifier_cuts_little("contiguous row", 0.0, &cell, &row, &out);
     let along = out
         .vos

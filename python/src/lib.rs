@@ -27,7 +27,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
 use vocc::bake::job::{BakeJob, Progress};
-use vocc::bake::pipeline::{BakeParams, Slices};
+use vocc::bake::params::{BakeParams, Slices};
 use vocc::runtime::culler::{pvs, BoxTree, MAX_BOXES};
 use vocc::runtime::format::{CellRecord, Store};
 use vocc::scene::{self, ReadOptions};

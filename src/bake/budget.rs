@@ -18,11 +18,11 @@ use crate::scene::Scene;
 pub const MAX_GRID_BYTES: f64 = 2.0 * 1024.0 * 1024.0 * 1024.0;
 
 /// Memory per grid cell, bytes, when every cell is baked: its record in the job's table, its
-/// baked cell ([`super::pipeline::CellBake`]) and its share of the selection and hash tables
+/// baked cell ([`super::plan::CellBake`]) and its share of the selection and hash tables
 /// (cell id, hash, hash pair), and its index byte in the store.
 pub fn bytes_per_cell() -> f64 {
     (std::mem::size_of::<CellRecord>()
-        + std::mem::size_of::<super::pipeline::CellBake>()
+        + std::mem::size_of::<super::plan::CellBake>()
         + 4
         + 8
         + 16

@@ -9,12 +9,12 @@
 //! Invariant (what makes reuse exact): the bake of cell `c` reads the frame, the options, and
 //! only objects (their boxes, costs and blockers) whose bounding box meets the square
 //! `centre(c) ± Plan::reach()`, in index order:
-//! - the inside test and the growth's blockers are R-tree queries within `cell ± search_m`
-//!   (`umbra::usable`; rays in the growth are filtered to those), the ground level within
+//! - the inside test and both generators' blockers are R-tree queries within `cell ± search_m`
+//!   (`cell::usable`; rays in the growth are filtered to those), the ground level within
 //!   `cell ± 50 m`, or a wider square up to `cell ± search_m` when that one holds no blocker,
 //!   every blocker lying inside its object's box;
 //! - the occludee weights come from boxes meeting the umbra box, clamped to
-//!   `centre ± reach` (`decimate::Occludees::hidden`);
+//!   `centre ± reach` (`occludees::Occludees::hidden`);
 //! - ids enter only through comparisons and sorting, so only their relative order matters, and
 //!   an edit elsewhere in the file does not change a cell's hash.
 //!
@@ -27,7 +27,9 @@
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
-use super::pipeline::Plan;
+use super::growth::GrowParams;
+use super::params::BakeParams;
+use super::plan::Plan;
 use crate::runtime::format::encode_frame;
 use crate::runtime::grid::CellId;
 
@@ -68,6 +70,58 @@ pub enum HashesError {
     Length { got: usize, want: usize },
     #[error("hashes file checksum mismatch: the file is damaged")]
     Checksum,
+}
+
+/// The text of every bake option but the cell selection, as the global hash takes it: the
+/// `Debug` form of one tuple, in the layout of the first `.hashes` files (a changed layout would
+/// refuse every older bake's reuse). `search_m` is printed inside the growth's parameters, where
+/// it stood then ([`GrowKey`]).
+fn options_key(p: &BakeParams) -> String {
+    format!(
+        "{:?}",
+        (
+            p.cell_size,
+            p.eye,
+            p.slices,
+            p.max_vos,
+            GrowKey(&p.grow, p.search_m),
+            p.generator,
+            p.weigh_m,
+            p.map,
+            p.propose,
+            p.budget
+        )
+    )
+}
+
+/// [`GrowParams`] with `search_m` among its fields, printed as the derived `Debug` printed the
+/// struct that held both: `GrowParams { seeds: 8, search_m: 900.0, max_chain: 24, .. }`.
+struct GrowKey<'a>(&'a GrowParams, f64);
+
+impl std::fmt::Debug for GrowKey<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // Every field by name: a field added to `GrowParams` does not compile until it is
+        // placed here.
+        let GrowParams {
+            seeds,
+            max_chain,
+            max_bridges,
+            tries,
+            min_vo_m,
+            single_object,
+            verify,
+        } = self.0;
+        f.debug_struct("GrowParams")
+            .field("seeds", seeds)
+            .field("search_m", &self.1)
+            .field("max_chain", max_chain)
+            .field("max_bridges", max_bridges)
+            .field("tries", tries)
+            .field("min_vo_m", min_vo_m)
+            .field("single_object", single_object)
+            .field("verify", verify)
+            .finish()
+    }
 }
 
 /// A running 64-bit hash: each word is mixed in with the splitmix64 finalizer.
@@ -114,25 +168,7 @@ impl CellHashes {
         g.bytes(env!("CARGO_PKG_VERSION").as_bytes());
         // Every option but the cell selection (region, walkable area), which the zero hash of an
         // unbaked cell records.
-        let p = plan.params();
-        g.bytes(
-            format!(
-                "{:?}",
-                (
-                    p.cell_size,
-                    p.eye,
-                    p.slices,
-                    p.max_vos,
-                    &p.grow,
-                    p.generator,
-                    p.weigh_m,
-                    p.map,
-                    p.propose,
-                    p.budget
-                )
-            )
-            .as_bytes(),
-        );
+        g.bytes(options_key(plan.params()).as_bytes());
         g.bytes(&encode_frame(&plan.frame));
         // One hash per object: its box, cost and blockers (blockers are grouped by object).
         let mut object = vec![Mix::new(2); scene.objects.len()];
@@ -318,6 +354,21 @@ pub fn hashes_path(store: &std::path::Path) -> std::path::PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The options' text the global hash takes, for the default bake, as the `.hashes` files
+    /// written before `search_m` left the growth's parameters hold it: equal text, equal hash.
+    #[test]
+    fn the_options_key_keeps_its_layout() {
+        let p = BakeParams::default();
+        assert_eq!(
+            options_key(&p),
+            "(100.0, (1.5, 2.0), Auto, 10, GrowParams { seeds: 8, search_m: 900.0, max_chain: 24, \
+             max_bridges: 2, tries: 6, min_vo_m: 1.0, single_object: false, verify: false }, \
+             Long, 1000.0, MapParams { edge_eyes: 3, bins: 512, px: 4.0, half: 1024.0 }, \
+             ProposeParams { directions: 16, spacing: 32.0, step: 2, max_offset: 900.0, \
+             min_len: 60.0, per_direction: 1 }, 25)"
+        );
+    }
 
     #[test]
     fn file_form_round_trips_and_refuses_damage() {

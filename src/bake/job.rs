@@ -23,7 +23,8 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::incremental::{CellHashes, HashesError};
-use super::pipeline::{bake_cells, records, BakeError, BakeParams, CellBake, Plan};
+use super::params::BakeParams;
+use super::plan::{bake_cells, records, BakeError, CellBake, Plan};
 use crate::runtime::crc::crc32;
 use crate::runtime::format::{encode_frame, encode_store, CellRecord, FormatError, Store};
 use crate::runtime::grid::CellId;
@@ -101,7 +102,7 @@ pub struct ReuseDecision {
     pub reused: usize,
 }
 
-/// Quantization of the stored VOs, summed over the baked cells ([`super::pipeline::CellStats`]).
+/// Quantization of the stored VOs, summed over the baked cells ([`super::plan::CellStats`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Quantization {
     pub tried: usize,

@@ -1,31 +1,42 @@
-//! The bake: from blockers to per-cell virtual occluders. One file per pipeline stage.
+//! The bake: from blockers to per-cell virtual occluders. One file per stage, one folder per
+//! generator.
 //!
-//! Stages of the long generator (the default), in pipeline order: [`slice`] (slice heights and
-//! rule 2), [`hidden`] (per slice, a raster of what the cell's boundary cannot see, sampled),
-//! [`propose`] (the long hidden runs of lines on it), [`certify`] (the exact verifier cuts a
-//! proposal into certified pieces; quantization to 5 bytes, re-checked, then the highest level
-//! that still holds), [`select`] (lazy greedy by occludee cost hidden, certifying only what it
-//! picks). The growth generator, kept as a measured baseline: [`seed`], [`umbra`] (aggregate
-//! umbrae grown from single buildings) and [`decimate`] (the few most effective), with
-//! [`quantize`]. [`pipeline`] orchestrates them per cell and over cells; [`job`] is the whole
-//! bake as one library call (selection, shards, reuse, hashes, encoding, summary); [`svg`] draws
-//! one cell. Every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in its
-//! dequantized form; a VO that fails is shrunk or dropped and counted.
+//! The frame of a bake: [`params`] (what it is asked for, one documented
+//! [`params::BakeParams`]), [`plan`] (the frame, the blocker set, the occludees, one cell's
+//! dispatch, all cells in parallel, the records), [`cell`] (the setup both generators share:
+//! ground, eyes, the inside-a-building skip, the usable blockers with their rule-2 support, the
+//! slice levels; and the record of the VOs picked), [`slice`](mod@slice) (slice heights,
+//! area-angle weights and rule 2), [`occludees`] (the boxes and costs both generators weigh
+//! with, rule 3), [`quantize`] (a VO to its 5 bytes). [`job`] is the whole bake as one library
+//! call (selection, shards, reuse, hashes, encoding, summary), [`incremental`] the per-cell
+//! content hashes, [`budget`] the grid's memory check.
+//! The long generator (the default), in pipeline order: [`long`] (one cell's VOs, trimming),
+//! [`hidden`] (per slice, a raster of what the cell's boundary cannot see, sampled), [`propose`]
+//! (the long hidden runs of lines on it), [`certify`] (the exact verifier cuts a proposal into
+//! certified pieces; quantization to 5 bytes, re-checked, then the highest level that still
+//! holds), [`select`] (lazy greedy by occludee cost hidden, certifying only what it picks).
+//! The growth generator, kept as a measured baseline: [`growth`] (aggregate umbrae grown from
+//! single buildings, the dense set, greedy decimation, the picture of one cell's growth).
+//! Invariant: every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in
+//! its dequantized form; a VO that fails is shrunk or dropped and counted. This file holds
+//! [`BlockerSet`] (2D blockers, their R-tree and a bucket grid for ray walks) and the mid-height
+//! slice of `vocc render --debug`.
 
 pub mod budget;
+pub mod cell;
 pub mod certify;
-pub mod decimate;
+pub mod growth;
 pub mod hidden;
 pub mod incremental;
 pub mod job;
-pub mod pipeline;
+pub mod long;
+pub mod occludees;
+pub mod params;
+pub mod plan;
 pub mod propose;
 pub mod quantize;
-pub mod seed;
 pub mod select;
 pub mod slice;
-pub mod svg;
-pub mod umbra;
 
 use glam::DVec2;
 use rstar::primitives::{GeomWithData, Rectangle};

@@ -261,6 +261,36 @@ pub fn choose_levels(levels: &[f64], blockers: &[(f64, f64)], n: usize) -> Vec<u
     out
 }
 
+/// Area-angle of a blocker `poly` seen from `centre`, with walls `height` tall (paper 001, Coorg
+/// and Teller), summed over the walls that face the centre: `a (N . V^) / |V|^2`, with `a` the
+/// wall's area up to the slice (length times height), `N` its outward unit normal, `V` the
+/// vector from the centre to the wall's midpoint and `V^` its direction. The slices' weights
+/// ([`choose_levels`]) and the growth's seeds rank blockers by it.
+pub fn area_angle(poly: &[DVec2], height: f64, centre: DVec2) -> f64 {
+    let n = poly.len();
+    let mut sum = 0.0;
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        let edge = b - a;
+        let len = edge.length();
+        if len == 0.0 {
+            continue;
+        }
+        // Counter-clockwise polygon: the outward normal is the edge turned clockwise.
+        let normal = DVec2::new(edge.y, -edge.x) / len;
+        let v = (a + b) * 0.5 - centre;
+        let d2 = v.length_squared();
+        if d2 == 0.0 {
+            continue;
+        }
+        let facing = -normal.dot(v / d2.sqrt());
+        if facing > 0.0 {
+            sum += len * height * facing / d2;
+        }
+    }
+    sum
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

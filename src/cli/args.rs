@@ -7,7 +7,7 @@
 
 use clap::Args;
 
-use vocc::bake::pipeline::{Effort, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
+use vocc::bake::params::{Effort, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
 use vocc::runtime::frame::MAX_VOS_PER_CELL;
 use vocc::scene::{OnBadHeight, ReadOptions};
 

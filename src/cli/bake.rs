@@ -13,7 +13,7 @@ use clap::Args;
 
 use vocc::bake::incremental::hashes_path;
 use vocc::bake::job::{BakeJob, BakeSummary, JobError, ReuseRefusal};
-use vocc::bake::pipeline::{BakeParams, Effort, Generator, Slices};
+use vocc::bake::params::{BakeParams, Effort, Generator, Slices};
 use vocc::scene;
 
 use crate::args::{

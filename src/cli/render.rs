@@ -40,9 +40,14 @@ pub fn render_debug(
     let set = vocc::bake::slice_blockers(&s, z);
     let cell = vocc::bake::grid_cell(&s, local, cell_size);
     let t = Instant::now();
-    let out = vocc::bake::umbra::grow_cell(&cell, &set, &Default::default());
+    let out = vocc::bake::growth::dense::grow_cell(
+        &cell,
+        &set,
+        &Default::default(),
+        vocc::bake::params::SEARCH_M,
+    );
     let ms = t.elapsed().as_secs_f64() * 1e3;
-    let svg = vocc::bake::svg::render(&cell, &set, &out, 0.1 * cell_size);
+    let svg = vocc::bake::growth::svg::render(&cell, &set, &out, 0.1 * cell_size);
     write_atomically(output, |w| w.write_all(svg.as_bytes()))?;
     eprintln!(
         "cell at ({:.1}, {:.1}) world, slice z = {:.1} m: {} blockers in the slice, {} seeds, {} dense VOs, {} rejected by the verifier, {ms:.1} ms; wrote {}",
@@ -92,14 +97,14 @@ pub fn render_store(
     let mut visible = Vec::new();
     vocc::runtime::culler::pvs(&f, id, &rec, &tree, &mut visible);
     // The baseline: this cell baked with single-building chains, same grid and eyes.
-    let mut params = vocc::bake::pipeline::BakeParams {
-        generator: vocc::bake::pipeline::Generator::Growth,
+    let mut params = vocc::bake::params::BakeParams {
+        generator: vocc::bake::params::Generator::Growth,
         cell_size: f.grid.cell_size,
         eye: (f.eye_lo, f.eye_hi),
         ..Default::default()
     };
     params.grow.single_object = true;
-    let plan = vocc::bake::pipeline::Plan::new(&s, params)?;
+    let plan = vocc::bake::plan::Plan::new(&s, params)?;
     let base_rec = plan.bake_cell(id).record;
     let mut base_visible = Vec::new();
     vocc::runtime::culler::pvs(&plan.frame, id, &base_rec, &tree, &mut base_visible);

@@ -13,7 +13,8 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::bake::job::BakeJob;
-use crate::bake::pipeline::{BakeParams, CellBake, Effort, Generator, Plan, Slices};
+use crate::bake::params::{BakeParams, Effort, Generator, Slices};
+use crate::bake::plan::{CellBake, Plan};
 use crate::runtime::culler::BoxTree;
 use crate::runtime::format::{encode_store, CellRecord, Store};
 use crate::runtime::CellId;

@@ -2,47 +2,21 @@
 //!
 //! Input: a cell, the slice's blockers near it, and `k`. Output: blocker ids, best first.
 //! Rule: rank blockers by the area-angle of paper 001 (Coorg and Teller), summed over the walls
-//! that face the cell centre: `a (N . V^) / |V|^2`, with `a` the wall's area up to the slice
-//! (length times height), `N` its outward unit normal, `V` the vector from the cell centre to the
-//! wall's midpoint and `V^` its direction; take the top `k`. Then, so that no direction is left
-//! without a seed, split the full turn around the cell centre into [`SECTORS`] sectors and add the
-//! best-ranked blocker of every sector that the first seeds' angular intervals leave uncovered.
+//! that face the cell centre ([`area_angle`], which also weighs the slices); take the top `k`.
+//! Then, so that no direction is left without a seed, split the full turn around the cell centre
+//! into [`SECTORS`] sectors and add the best-ranked blocker of every sector that the first seeds'
+//! angular intervals leave uncovered.
 //! Invariant: deterministic (ties broken by id); blockers that overlap the cell are never seeds
 //! (no line separates them from it); blockers that only touch it may be.
 
 use glam::DVec2;
 
-use super::BlockerSet;
+use crate::bake::slice::area_angle;
+use crate::bake::BlockerSet;
 use crate::geom::predicates::convex_interiors_disjoint;
 
 /// Sectors of the direction rule.
 pub const SECTORS: usize = 16;
-
-/// Area-angle of blocker `b` seen from `centre`, with walls `height` tall.
-pub fn area_angle(poly: &[DVec2], height: f64, centre: DVec2) -> f64 {
-    let n = poly.len();
-    let mut sum = 0.0;
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[(i + 1) % n]);
-        let edge = b - a;
-        let len = edge.length();
-        if len == 0.0 {
-            continue;
-        }
-        // Counter-clockwise polygon: the outward normal is the edge turned clockwise.
-        let normal = DVec2::new(edge.y, -edge.x) / len;
-        let v = (a + b) * 0.5 - centre;
-        let d2 = v.length_squared();
-        if d2 == 0.0 {
-            continue;
-        }
-        let facing = -normal.dot(v / d2.sqrt());
-        if facing > 0.0 {
-            sum += len * height * facing / d2;
-        }
-    }
-    sum
-}
 
 /// Picks the seeds of one cell among `candidates`.
 pub fn seeds(cell: &[DVec2], set: &BlockerSet, candidates: &[u32], k: usize) -> Vec<u32> {

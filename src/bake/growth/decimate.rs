@@ -16,74 +16,8 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use crate::runtime::culler::BoxTree;
-use crate::runtime::frame::{CellView, VoGeom};
-use crate::runtime::occlusion::PreparedVo;
-
 /// Stop when the best remaining gain is below this share of the cost already hidden.
 pub const MIN_GAIN_SHARE: f64 = 0.01;
-
-/// The occludees of a scene: boxes in the local frame, with costs, under the runtime's box
-/// hierarchy. Occludees are named by their position in the hierarchy (each subtree a
-/// contiguous range), so the hidden sets of rule 3 come out whole subtrees at a time.
-pub struct Occludees {
-    /// Boxes and costs, by position.
-    pub boxes: Vec<[f64; 6]>,
-    pub cost: Vec<u64>,
-    tree: BoxTree,
-}
-
-impl Occludees {
-    /// `boxes[i]` and `cost[i]` of object `i`.
-    pub fn new(boxes: Vec<[f64; 6]>, cost: Vec<u64>) -> Occludees {
-        let tree = BoxTree::new(&boxes);
-        let by_pos = (0..tree.positions() as u32).map(|p| tree.id_at(p) as usize);
-        Occludees {
-            boxes: by_pos.clone().map(|i| boxes[i]).collect(),
-            cost: by_pos.map(|i| cost[i]).collect(),
-            tree,
-        }
-    }
-
-    pub fn from_scene(scene: &crate::scene::Scene) -> Occludees {
-        let boxes = scene
-            .objects
-            .iter()
-            .map(|o| {
-                let (a, b) = (o.bbox.min, o.bbox.max);
-                [a.x, a.y, a.z, b.x, b.y, b.z]
-            })
-            .collect();
-        let cost = scene.objects.iter().map(|o| o.cost.max(1)).collect();
-        Occludees::new(boxes, cost)
-    }
-
-    /// The occludees (positions) within `radius` of the cell centre (per axis) that `vo` hides
-    /// from the cell (rule 3), ascending.
-    pub fn hidden(&self, view: &CellView, vo: &VoGeom, radius: f64) -> Vec<u32> {
-        let p = PreparedVo::new(view, vo);
-        let r = view.rect;
-        let (cx, cy) = (0.5 * (r[0] + r[2]), 0.5 * (r[1] + r[3]));
-        let mut out = Vec::new();
-        self.tree.hidden_positions(
-            view,
-            &p,
-            [cx - radius, cy - radius, cx + radius, cy + radius],
-            &self.boxes,
-            &mut out,
-        );
-        out
-    }
-
-    /// The object at position `pos`.
-    pub fn object(&self, pos: u32) -> u32 {
-        self.tree.id_at(pos)
-    }
-
-    pub fn cost_of(&self, ids: &[u32]) -> u64 {
-        ids.iter().map(|&i| self.cost[i as usize]).sum()
-    }
-}
 
 /// Sum of the costs of `ids` not in `covered` (both ascending).
 fn gain(ids: &[u32], covered: &[u32], cost: &[u64]) -> u64 {

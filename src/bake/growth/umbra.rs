@@ -1,9 +1,16 @@
-//! Aggregate umbrae and the dense set of 2D virtual occluders (paper 002, section 3).
+//! Aggregate umbrae: the growth from one seed and its 2D virtual occluders (paper 002,
+//! section 3).
 //!
-//! Input: a convex cell (counter-clockwise), the slice's [`BlockerSet`] and [`GrowParams`].
-//! Output: the dense set of VOs of the cell, each a segment with both endpoints on a 2^-10 m grid
-//! and hidden from the whole cell, plus the growth trace for pictures and the number of VOs the
-//! verifier had to cut or drop (the gate; tests require 0).
+//! Input: a convex cell (counter-clockwise), the slice's [`BlockerSet`], the blockers it may use
+//! (sorted ids, none overlapping the cell), [`GrowParams`], the search distance `search_m`
+//! (metres) and a seed. Output: the VOs placed behind the seed's chains ([`Vo`]), each a segment
+//! with both endpoints on a 2^-10 m grid and hidden from the whole cell, and the growth trace for
+//! pictures ([`SeedTrace`]). The dense set over all seeds, and the verifier's gate, are
+//! [`super::dense`]'s.
+//! Invariants: every VO lies in its chain's certified region, both snapped ends checked exactly
+//! (below); the caches are keyed by blocker ids and coordinate bits and only looked up, so the
+//! output does not depend on their order; chains hold only the blockers given as usable, found
+//! along the active lines no farther than `search_m`.
 //!
 //! ## Growth
 //! From each seed a chain `K = (B_1, .., B_m)` of blockers grows, ordered left to right as seen
@@ -44,7 +51,7 @@
 //! conditions exclude). A VO is a segment of a line behind the chain, clipped to that region in
 //! floating point, shrunk, snapped inward to the grid, and kept only when both snapped endpoints
 //! pass every condition exactly; by convexity the whole segment then lies in the region.
-//! The exact verifier then checks every VO again, independently.
+//! The exact verifier then checks every VO again, independently ([`super::dense`], or the bake).
 
 use std::collections::{HashMap as StdHashMap, HashSet as StdHashSet};
 use std::hash::{BuildHasherDefault, Hasher};
@@ -53,7 +60,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 /// against crafted collisions: a multiply-rotate hash (as in rustc's FxHash) instead of SipHash.
 /// Iteration order never reaches the output (maps are looked up, sets only tested).
 #[derive(Default, Clone, Copy)]
-struct FastHasher(u64);
+pub(super) struct FastHasher(u64);
 
 impl Hasher for FastHasher {
     fn write(&mut self, bytes: &[u8]) {
@@ -75,16 +82,16 @@ impl Hasher for FastHasher {
 }
 
 type HashMap<K, V> = StdHashMap<K, V, BuildHasherDefault<FastHasher>>;
-type HashSet<K> = StdHashSet<K, BuildHasherDefault<FastHasher>>;
+pub(super) type HashSet<K> = StdHashSet<K, BuildHasherDefault<FastHasher>>;
 
 use glam::DVec2;
 
-use super::{bounds, seed, BlockerSet};
+use super::GrowParams;
+use crate::bake::{bounds, BlockerSet};
 use crate::geom::predicates::{
-    common_tangents, convex_interiors_disjoint, orient, point_in_convex, segment_meets_convex,
-    set_side, CommonTangents, Containment, Orientation, SetSide,
+    common_tangents, orient, point_in_convex, segment_meets_convex, set_side, CommonTangents,
+    Containment, Orientation, SetSide,
 };
-use crate::geom::verify::Verifier;
 
 /// VO endpoints lie on this grid, metres (a power of two, so the verifier's bisection points are
 /// exact).
@@ -93,45 +100,6 @@ pub const VO_GRID_M: f64 = 1.0 / 1024.0;
 pub const VO_SHRINK_M: f64 = 0.005;
 /// Length of the boxes that query the R-tree along an active line, metres.
 pub const QUERY_STEP_M: f64 = 25.0;
-
-/// Parameters of the growth.
-#[derive(Clone, Debug)]
-pub struct GrowParams {
-    /// Seeds ranked by area-angle (the direction rule may add more).
-    pub seeds: usize,
-    /// How far the active lines are followed from the cell, metres.
-    pub search_m: f64,
-    /// Longest chain.
-    pub max_chain: usize,
-    /// Bridges (case 2) in a row on one side.
-    pub max_bridges: usize,
-    /// Candidates tried per side and step.
-    pub tries: usize,
-    /// Shortest VO kept, metres.
-    pub min_vo_m: f64,
-    /// No fusion: a chain holds the convex pieces of one object only (the single-building
-    /// baseline of the paper's Fig. 7).
-    pub single_object: bool,
-    /// Pass every dense VO through the exact verifier before returning it (the gate). The bake
-    /// turns it off: it verifies the few VOs it keeps after quantization instead, from their
-    /// stored bytes, with rule 2's blockers.
-    pub verify: bool,
-}
-
-impl Default for GrowParams {
-    fn default() -> Self {
-        GrowParams {
-            seeds: 8,
-            search_m: 900.0,
-            max_chain: 24,
-            max_bridges: 2,
-            tries: 6,
-            min_vo_m: 1.0,
-            single_object: false,
-            verify: true,
-        }
-    }
-}
 
 /// A 2D virtual occluder.
 #[derive(Clone, Debug, PartialEq)]
@@ -161,13 +129,6 @@ pub enum Case {
     Both,
 }
 
-impl CellVos {
-    /// How many VOs the verifier had to cut or drop (tests require 0).
-    pub fn rejected(&self) -> usize {
-        self.rejected_vos.len()
-    }
-}
-
 /// One accepted chain state, for pictures.
 #[derive(Clone, Debug)]
 pub struct Step {
@@ -186,16 +147,6 @@ pub struct Step {
 pub struct SeedTrace {
     pub seed: u32,
     pub steps: Vec<Step>,
-}
-
-/// Everything the growth gives for one cell.
-#[derive(Clone, Debug, Default)]
-pub struct CellVos {
-    /// The dense set, every VO verified.
-    pub vos: Vec<Vo>,
-    /// VOs the verifier had to cut or drop (must be none), as the growth emitted them.
-    pub rejected_vos: Vec<Vo>,
-    pub traces: Vec<SeedTrace>,
 }
 
 /// `orient(u, v, q)` must be `Ccw` (strict) or not `Cw`.
@@ -222,12 +173,14 @@ struct Region {
 }
 
 /// Per-cell growth state: the cell, blockers and cached tangents.
-struct Grower<'a> {
-    cell: &'a [DVec2],
+pub(super) struct Grower<'a> {
+    pub(super) cell: &'a [DVec2],
     centre: DVec2,
-    set: &'a BlockerSet,
-    params: &'a GrowParams,
-    usable: HashSet<u32>,
+    pub(super) set: &'a BlockerSet,
+    pub(super) params: &'a GrowParams,
+    /// How far the active lines are followed from the cell, metres.
+    search_m: f64,
+    pub(super) usable: HashSet<u32>,
     cell_tangents: HashMap<u32, CommonTangents>,
     pair_tangents: HashMap<(u32, u32), CommonTangents>,
     common: HashMap<(u32, u32), Vec<DVec2>>,
@@ -505,12 +458,12 @@ impl<'a> Grower<'a> {
         if d == DVec2::ZERO {
             return Vec::new();
         }
-        let end = a + d * self.params.search_m;
-        let steps = (self.params.search_m / QUERY_STEP_M).ceil() as usize;
+        let end = a + d * self.search_m;
+        let steps = (self.search_m / QUERY_STEP_M).ceil() as usize;
         let mut out: Vec<u32> = Vec::new();
         for s in 0..steps {
             let p = a + d * (s as f64 * QUERY_STEP_M);
-            let q = a + d * (((s + 1) as f64 * QUERY_STEP_M).min(self.params.search_m));
+            let q = a + d * (((s + 1) as f64 * QUERY_STEP_M).min(self.search_m));
             self.set.each_in_box(p.min(q), p.max(q), |id| {
                 if !out.contains(&id) && segment_meets_convex(a, end, self.poly(id)) {
                     out.push(id);
@@ -574,7 +527,7 @@ impl<'a> Grower<'a> {
     }
 
     /// Grows one seed; returns its dense VOs and trace.
-    fn grow(&mut self, seed: u32) -> (Vec<Vo>, SeedTrace) {
+    pub(super) fn grow(&mut self, seed: u32) -> (Vec<Vo>, SeedTrace) {
         let mut chain = vec![seed];
         let mut vos = self.place(&chain);
         let mut best = self.score(&vos);
@@ -724,22 +677,13 @@ fn clip_snap(planes: &[HalfPlane], o: DVec2, dir: DVec2) -> Option<(DVec2, DVec2
     None
 }
 
-/// The blockers the growth of a cell may use: within the search distance, not overlapping it.
-pub fn usable(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> Vec<u32> {
-    let (lo, hi) = bounds(cell);
-    let r = DVec2::splat(params.search_m);
-    let mut near: Vec<u32> = set
-        .in_box(lo - r, hi + r)
-        .filter(|&id| convex_interiors_disjoint(&set.polys[id as usize], cell))
-        .collect();
-    near.sort_unstable();
-    near
-}
-
-fn grower<'a>(
+/// The growth state of `cell` over the blockers `near` (sorted ids), its active lines followed
+/// `search_m` metres.
+pub(super) fn grower<'a>(
     cell: &'a [DVec2],
     set: &'a BlockerSet,
     params: &'a GrowParams,
+    search_m: f64,
     near: &[u32],
 ) -> Grower<'a> {
     Grower {
@@ -747,6 +691,7 @@ fn grower<'a>(
         centre: cell.iter().copied().sum::<DVec2>() / cell.len() as f64,
         set,
         params,
+        search_m,
         usable: near.iter().copied().collect(),
         cell_tangents: HashMap::default(),
         pair_tangents: HashMap::default(),
@@ -754,104 +699,4 @@ fn grower<'a>(
         rays: HashMap::default(),
         separators: HashMap::default(),
     }
-}
-
-/// Grows from one given seed (for tests and pictures); the VOs are not yet verified.
-pub fn grow_seed(
-    cell: &[DVec2],
-    set: &BlockerSet,
-    params: &GrowParams,
-    seed: u32,
-) -> (Vec<Vo>, SeedTrace) {
-    let near = usable(cell, set, params);
-    grower(cell, set, params, &near).grow(seed)
-}
-
-/// Grows the dense VO set of one cell and passes it through the exact verifier.
-pub fn grow_cell(cell: &[DVec2], set: &BlockerSet, params: &GrowParams) -> CellVos {
-    CellGrower::new(cell, set, params).grow(&usable(cell, set, params))
-}
-
-/// The growth of one cell over several blocker subsets (the slices), sharing the tangents and
-/// ray queries between them: a tangent of two blockers does not depend on the slice.
-pub struct CellGrower<'a>(Grower<'a>);
-
-impl<'a> CellGrower<'a> {
-    pub fn new(cell: &'a [DVec2], set: &'a BlockerSet, params: &'a GrowParams) -> Self {
-        CellGrower(grower(cell, set, params, &[]))
-    }
-
-    /// The dense set over blockers `near_sorted` (sorted ids, none overlapping the cell).
-    pub fn grow(&mut self, near_sorted: &[u32]) -> CellVos {
-        self.0.usable = near_sorted.iter().copied().collect();
-        let (cell, set, params) = (self.0.cell, self.0.set, self.0.params);
-        grow_usable(&mut self.0, cell, set, params, near_sorted)
-    }
-}
-
-fn grow_usable(
-    g: &mut Grower,
-    cell: &[DVec2],
-    set: &BlockerSet,
-    params: &GrowParams,
-    near_sorted: &[u32],
-) -> CellVos {
-    let seeds = seed::seeds(cell, set, near_sorted, params.seeds);
-    let mut out = CellVos::default();
-    let mut dense: Vec<Vo> = Vec::new();
-    let mut grown: HashSet<u32> = HashSet::default();
-    for s in seeds {
-        // A seed already inside a grown cluster would grow the same cluster again.
-        if grown.contains(&s) {
-            continue;
-        }
-        let (vos, trace) = g.grow(s);
-        if let Some(last) = trace.steps.last() {
-            grown.extend(last.chain.iter().copied());
-        }
-        dense.extend(vos);
-        out.traces.push(trace);
-    }
-    // Identical segments from different chains count once.
-    let mut seen = HashSet::default();
-    dense.retain(|v| {
-        seen.insert((
-            v.a.x.to_bits(),
-            v.a.y.to_bits(),
-            v.b.x.to_bits(),
-            v.b.y.to_bits(),
-        ))
-    });
-    if !params.verify {
-        out.vos = dense;
-        return out;
-    }
-    // The gate: the exact verifier, which shares nothing with the growth but the predicates.
-    let ver = Verifier::new(
-        cell,
-        near_sorted
-            .iter()
-            .map(|&id| set.polys[id as usize].as_slice()),
-    );
-    for v in dense {
-        if ver.is_hidden(v.a, v.b) {
-            out.vos.push(v);
-            continue;
-        }
-        out.rejected_vos.push(v.clone());
-        let parts = ver.hidden_parts(v.a, v.b);
-        if let Some(h) = parts
-            .iter()
-            .max_by(|x, y| x.p0.distance(x.p1).total_cmp(&y.p0.distance(y.p1)))
-        {
-            if h.p0.distance(h.p1) >= params.min_vo_m {
-                out.vos.push(Vo {
-                    a: h.p0,
-                    b: h.p1,
-                    chain: v.chain,
-                });
-            }
-        }
-    }
-    out
 }

@@ -9,17 +9,17 @@ use std::fmt::Write;
 
 use glam::DVec2;
 
-use super::umbra::CellVos;
-use super::BlockerSet;
+use super::dense::CellVos;
+use crate::bake::{bounds, BlockerSet};
 
 /// Renders the cell, its growth trace and VOs, and the blockers around them. The frame holds
 /// the cell, every chain's blockers and every VO, plus `margin` metres.
 pub fn render(cell: &[DVec2], set: &BlockerSet, vos: &CellVos, margin: f64) -> String {
-    let (mut lo, mut hi) = super::bounds(cell);
+    let (mut lo, mut hi) = bounds(cell);
     for t in &vos.traces {
         for step in &t.steps {
             for &id in &step.chain {
-                let (a, b) = super::bounds(&set.polys[id as usize]);
+                let (a, b) = bounds(&set.polys[id as usize]);
                 lo = lo.min(a);
                 hi = hi.max(b);
             }

@@ -1,0 +1,160 @@
+//! One cell's setup, what both generators start from, and the record they end with.
+//!
+//! Input: the [`Plan`] and a cell id. Output: a `CellSetup`: the cell's polygon, ground level
+//! and eyes ([`CellView`]), the blockers near it that may support its VOs with their rule-2
+//! [`Support`] and their adjusted heights and weights, the VO top of every height level, and
+//! the slice levels ([`choose_levels`]); or, for a cell no generator needs to see, its record:
+//! empty (no blocker that may support a VO) or skipped (wholly inside a blocker standing above
+//! the eyes). [`usable`] is the blocker query both generators use; `CellSetup::finish` turns
+//! the VOs a generator picked into the cell's record.
+//! Invariants: a cell's setup reads only the blockers whose boxes meet `cell ± search_m` (within
+//! the reach, ARCHITECTURE.md invariant 13) and compares ids only; `near` is ascending, and
+//! `support` and `adjusted` are parallel to it; a record holds a ground byte only with VOs.
+
+use glam::DVec2;
+
+use super::params::Slices;
+use super::plan::{CellStats, Plan};
+use super::slice::{area_angle, choose_levels, Support};
+use super::{bounds, BlockerSet};
+use crate::geom::predicates::{convex_interiors_disjoint, point_in_convex, Containment};
+use crate::runtime::format::CellRecord;
+use crate::runtime::frame::{CellView, QVo, VoGeom, HEIGHT_LEVELS};
+use crate::runtime::grid::CellId;
+
+/// The blockers the VOs of a cell may use: those whose boxes meet the cell grown by `search_m`
+/// (metres) on every side, not overlapping it; ascending ids.
+pub fn usable(cell: &[DVec2], set: &BlockerSet, search_m: f64) -> Vec<u32> {
+    let (lo, hi) = bounds(cell);
+    let r = DVec2::splat(search_m);
+    let mut near: Vec<u32> = set
+        .in_box(lo - r, hi + r)
+        .filter(|&id| convex_interiors_disjoint(&set.polys[id as usize], cell))
+        .collect();
+    near.sort_unstable();
+    near
+}
+
+/// What both generators know of a cell before they propose anything.
+pub(super) struct CellSetup {
+    pub(super) id: CellId,
+    /// The cell's polygon, counter-clockwise, local frame.
+    pub(super) cell: [DVec2; 4],
+    /// The cell's ground level (the frame's ground byte), and its eyes as rule 3 sees them.
+    pub(super) ground: u8,
+    pub(super) view: CellView,
+    /// The height of that ground level, metres (local frame).
+    pub(super) g: f64,
+    /// The cell's centre.
+    pub(super) centre: DVec2,
+    /// The blockers that may support a VO, ascending ids: near ([`usable`]), apart from the
+    /// cell, standing from below the lowest eye (rule 2: `base <= e0 - lambda (e0 - g)`) to
+    /// above the eyes.
+    pub(super) near: Vec<u32>,
+    /// Rule 2's view of each of them from this cell.
+    pub(super) support: Vec<Support>,
+    /// Each one's adjusted height (metres) and area-angle weight, for the slices.
+    pub(super) adjusted: Vec<(f64, f64)>,
+    /// The VO top of every height level of the frame above these eyes, metres.
+    pub(super) levels: Vec<f64>,
+    /// The slice levels chosen for the cell, ascending (indices into `levels`).
+    pub(super) slices: Vec<u8>,
+}
+
+impl CellSetup {
+    /// The setup of cell `id`, or (as `Err`) its record when no generator has anything to do:
+    /// empty when it has no eyes or no blocker that may support a VO, skipped when it lies
+    /// wholly inside one blocker that stands above the eyes.
+    pub(super) fn new(plan: &Plan, id: CellId) -> Result<CellSetup, CellRecord> {
+        let f = &plan.frame;
+        let cell = plan.cell_polygon(id);
+        let ground = plan.ground_level(id);
+        let Some(view) = f.cell_view(id, ground) else {
+            return Err(CellRecord::EMPTY);
+        };
+        let (g, e0, e1) = (f.ground_z(ground), view.e0, view.e1);
+        // A cell wholly inside one blocker that stands above the eyes holds no eye.
+        let inside = plan.set.in_box(cell[0], cell[2]).any(|i| {
+            let p = &plan.set.polys[i as usize];
+            plan.base[i as usize] <= e0
+                && plan.top[i as usize] >= e1
+                && cell
+                    .iter()
+                    .all(|&c| point_in_convex(p, c) != Containment::Outside)
+        });
+        if inside {
+            return Err(CellRecord::Skipped);
+        }
+        // Blockers that may support a VO: near, apart from the cell, standing from below the
+        // lowest eye (rule 2: base <= e0 - lambda (e0 - g)) to above the eyes.
+        let near: Vec<u32> = usable(&cell, &plan.set, plan.params.search_m)
+            .into_iter()
+            .filter(|&i| plan.base[i as usize] <= e0 && plan.top[i as usize] > e1)
+            .collect();
+        if near.is_empty() {
+            return Err(CellRecord::EMPTY);
+        }
+        let centre = (cell[0] + cell[2]) * 0.5;
+        let support: Vec<Support> = near
+            .iter()
+            .map(|&i| {
+                let i = i as usize;
+                Support::new(&cell, &plan.set.polys[i], plan.base[i], plan.top[i])
+            })
+            .collect();
+        let adjusted: Vec<(f64, f64)> = near
+            .iter()
+            .zip(&support)
+            .map(|(&i, s)| {
+                let i = i as usize;
+                let w = area_angle(&plan.set.polys[i], plan.top[i] - plan.base[i], centre);
+                (s.adjusted_height(e1), w)
+            })
+            .collect();
+        let levels: Vec<f64> = (0..HEIGHT_LEVELS).map(|k| f.vo_top(e1, k)).collect();
+        let n = match plan.params.slices {
+            Slices::Auto => 5,
+            Slices::Fixed(n) => n as usize,
+        };
+        let slices = choose_levels(&levels, &adjusted, n);
+        Ok(CellSetup {
+            id,
+            cell,
+            ground,
+            view,
+            g,
+            centre,
+            near,
+            support,
+            adjusted,
+            levels,
+            slices,
+        })
+    }
+
+    /// The record of the cell's picked VOs (stored form, and the form before quantization,
+    /// most effective first), with the occludee cost they hide in `stats`.
+    pub(super) fn finish(
+        &self,
+        plan: &Plan,
+        vos: Vec<(QVo, VoGeom)>,
+        stats: &mut CellStats,
+    ) -> CellRecord {
+        let (id, ground, view) = (self.id, self.ground, &self.view);
+        let f = &plan.frame;
+        let (vos, before): (Vec<QVo>, Vec<VoGeom>) = vos.into_iter().unzip();
+        stats.unquantized = before;
+        let mut all: Vec<u32> = Vec::new();
+        for q in &vos {
+            if let Some(geom) = f.dequantize(id, ground, q) {
+                all.extend(plan.occludees.hidden(view, &geom, plan.reach()));
+            }
+        }
+        all.sort_unstable();
+        all.dedup();
+        stats.hidden_cost = plan.occludees.cost_of(&all);
+        // A cell without VOs stores no ground byte: its ground is 0 in the record.
+        let ground = if vos.is_empty() { 0 } else { ground };
+        CellRecord::new(ground, &vos).expect("greedy stops at max_vos, checked <= 10 in Plan::new")
+    }
+}

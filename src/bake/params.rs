@@ -1,0 +1,165 @@
+//! What a bake is asked for: one struct, [`BakeParams`], with the effort settings and the limits.
+//!
+//! Input: the caller's choices (the CLI's flags, the Python binding's arguments, a test's
+//! values) over [`BakeParams::default`]. Output: [`BakeParams`], which [`super::plan::Plan::new`]
+//! validates (the limits below, named in its [`super::plan::BakeError`]) before anything is baked.
+//! Every field says what it is, its unit, and which generator reads it: both, only the long one
+//! ([`Generator::Long`], the default), or only the growth ([`Generator::Growth`]).
+//! Invariants: no field but the cell selection (`region`, `walkable`) changes a cell's record
+//! without changing the `.hashes` file's global hash (`super::incremental` hashes all of them, in
+//! a fixed layout); the defaults are what `vocc bake` bakes with no option.
+
+use super::growth::GrowParams;
+use crate::runtime::frame::MAX_VOS_PER_CELL;
+
+/// The smallest view cell, metres. VO endpoints lie on a grid of at least 2 m at the default
+/// search distance, so smaller cells give no finer occluders, only many more cells to bake.
+pub const MIN_CELL_SIZE_M: f64 = 1.0;
+/// The largest view cell, metres.
+pub const MAX_CELL_SIZE_M: f64 = 1e5;
+/// How far around a cell the blockers of its VOs are looked for by default, metres
+/// ([`BakeParams::search_m`]).
+pub const SEARCH_M: f64 = 900.0;
+
+/// How many slices a cell gets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slices {
+    /// Up to 5, fewer when the heights around the cell do not spread over 5 levels.
+    Auto,
+    /// Up to this many (1 to 5), fewer when levels coincide.
+    Fixed(u8),
+}
+
+/// What the bake is asked for.
+#[derive(Clone, Debug)]
+pub struct BakeParams {
+    /// Side of a view cell, metres ([`MIN_CELL_SIZE_M`] to [`MAX_CELL_SIZE_M`]). Both generators.
+    pub cell_size: f64,
+    /// Eye heights above a cell's ground, lowest and highest, metres (`0 <= low <= high`). Both
+    /// generators (rule 2 and rule 3 heights, the frame's eye range).
+    pub eye: (f64, f64),
+    /// How many slice levels a cell is baked at. Both generators.
+    pub slices: Slices,
+    /// Most VOs stored per cell, a count (1 to [`MAX_VOS_PER_CELL`]). Both generators.
+    pub max_vos: usize,
+    /// Bake only the cells meeting this local rectangle `[x0, y0, x1, y1]`, metres (the grid
+    /// still covers the whole scene). Cell selection, both generators; not in the global hash.
+    pub region: Option<[f64; 4]>,
+    /// Bake only the cells meeting this walkable area (outer rings, local frame). Cell
+    /// selection, both generators; not in the global hash.
+    pub walkable: Option<crate::scene::walkable::Area>,
+    /// How far around a cell (per axis, past its sides) the blockers that may support its VOs
+    /// are taken from, metres. Both generators; it also bounds the ground level's widening
+    /// search, sets the quantization window (the quantum) and, with the cell size, the reach
+    /// ([`super::plan::Plan::reach`]); the growth follows its active lines this far.
+    pub search_m: f64,
+    /// The growth's own knobs (seeds, chain length, bridges, tries, shortest VO, single-object
+    /// chains, the dense set's verification). The growth only.
+    pub grow: GrowParams,
+    /// Which generator proposes the VOs.
+    pub generator: Generator,
+    /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres (at
+    /// least: the weighing square is the reach, which also covers `search_m` past the cell).
+    /// Both generators.
+    pub weigh_m: f64,
+    /// The sampled visibility of the cell's boundary: eyes per edge, angular bins, pixel side
+    /// (metres) and raster half-side (metres). The long generator only (set by [`Effort`]).
+    pub map: super::hidden::MapParams,
+    /// The line scan over that raster: directions, line spacing (metres), step (pixels),
+    /// farthest line (metres), shortest run (metres), runs kept per direction and band. The long
+    /// generator only (set by [`Effort`]).
+    pub propose: super::propose::ProposeParams,
+    /// Exact certifications the long generator's selection may run per cell, a count
+    /// ([`super::select`]). The long generator only (set by [`Effort`]).
+    pub budget: usize,
+}
+
+/// How hard the long generator looks, from fast to tight: how many eyes sample the cell's
+/// boundary, how many runs per direction are proposed, how many certifications a cell may run.
+/// Every setting is as safe as the others (only the exact verifier decides what is stored);
+/// they trade bake time for culled share (docs/RESULTS.md, "Speed against culling").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Effort {
+    Fast,
+    #[default]
+    Default,
+    Tight,
+}
+
+impl Effort {
+    /// The parameters of this effort, over `p`.
+    pub fn apply(self, p: &mut BakeParams) {
+        let (eyes, per_direction, budget) = match self {
+            Effort::Fast => (1, 1, 12),
+            Effort::Default => (3, 1, 25),
+            Effort::Tight => (7, 2, 60),
+        };
+        p.map.edge_eyes = eyes;
+        p.propose.per_direction = per_direction;
+        p.budget = budget;
+    }
+}
+
+/// Which generator proposes a cell's VOs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Generator {
+    /// Aggregate umbrae grown from seeds (paper 002, section 3; [`super::growth`]).
+    Growth,
+    /// Long hidden runs of lines from sampled from-region visibility ([`super::long`]).
+    Long,
+}
+
+impl Default for BakeParams {
+    fn default() -> Self {
+        BakeParams {
+            cell_size: 100.0,
+            eye: (1.5, 2.0),
+            slices: Slices::Auto,
+            max_vos: MAX_VOS_PER_CELL,
+            region: None,
+            walkable: None,
+            search_m: SEARCH_M,
+            grow: GrowParams {
+                verify: false,
+                ..GrowParams::default()
+            },
+            generator: Generator::Long,
+            weigh_m: 1000.0,
+            map: super::hidden::MapParams::default(),
+            propose: super::propose::ProposeParams::default(),
+            budget: 0,
+        }
+        .with_effort(Effort::Default)
+    }
+}
+
+impl std::str::FromStr for Effort {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Effort, String> {
+        match s {
+            "fast" => Ok(Effort::Fast),
+            "default" => Ok(Effort::Default),
+            "tight" => Ok(Effort::Tight),
+            _ => Err(format!("expected fast, default or tight, got {s:?}")),
+        }
+    }
+}
+
+impl std::str::FromStr for Generator {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Generator, String> {
+        match s {
+            "long" => Ok(Generator::Long),
+            "growth" => Ok(Generator::Growth),
+            _ => Err(format!("expected long or growth, got {s:?}")),
+        }
+    }
+}
+
+impl BakeParams {
+    /// These parameters with the long generator's settings of `effort`.
+    pub fn with_effort(mut self, effort: Effort) -> BakeParams {
+        effort.apply(&mut self);
+        self
+    }
+}

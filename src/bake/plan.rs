@@ -1,0 +1,422 @@
+//! The plan of a bake and its cells: a scene and [`BakeParams`] in, one stored record per cell
+//! out.
+//!
+//! Input: a loaded [`Scene`] and [`BakeParams`]. Output: a [`Plan`] (the store's [`Frame`], all
+//! blockers with their R-tree and shared edges, the occludees) and, per cell in id order, a
+//! [`CellBake`]: its record (skipped, or its ground level and at most `max_vos` quantized VOs,
+//! most effective first) and what it took ([`CellStats`]); then the store's records and bytes.
+//! Per cell ([`Plan::bake_cell`]): the setup both generators share ([`super::cell`]: ground,
+//! eyes, the inside-a-building skip, the near blockers with their rule-2 support, the slice
+//! levels), then the generator the parameters name: [`super::long`] (the default) or
+//! [`super::growth`]. Both re-check every stored VO in its dequantized form with rule 2 and the
+//! exact verifier; a VO that fails is shrunk or dropped and counted.
+//! Invariants: the parameters are validated, and the grid's memory checked, before anything is
+//! allocated per cell; each cell is baked from the scene alone within [`Plan::reach`] (no state
+//! shared between cells), so the output is the same for any thread count and any order of
+//! cells; no cell gets more than [`MAX_VOS_PER_CELL`] VOs.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::cell::CellSetup;
+use super::occludees::Occludees;
+use super::params::{BakeParams, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
+use super::BlockerSet;
+use crate::runtime::format::{encode_store, CellRecord, FormatError};
+use crate::runtime::frame::{Frame, VoGeom, MAX_VOS_PER_CELL, QUANT_STEPS};
+use crate::runtime::grid::{CellId, GridDescriptor};
+use crate::scene::Scene;
+
+/// Step between ground levels when the ground is not flat, metres (at least).
+pub const GROUND_STEP_M: f64 = 0.25;
+/// Blockers within this distance of a cell decide its ground, metres. When none stands that
+/// near (a square, a field, the water beside a city), the radius doubles until some blocker is
+/// within it, up to the search radius of the VOs' blockers (`BakeParams::search_m`): the cell
+/// then stands on the ground of the nearest buildings, not on the scene's lowest.
+pub const GROUND_RADIUS_M: f64 = 50.0;
+/// The cell's ground is this percentile of the bases of the blockers near it, so that most of
+/// them stand on or below it (rule 2 needs a blocker's base at or below the VO's bottom).
+pub const GROUND_QUANTILE_PCT: usize = 90;
+/// VO top of level k above the eyes: `H0_M * (H_RATIO^k - 1)`.
+pub const H0_M: f64 = 2.0;
+pub const H_RATIO: f64 = 1.25;
+
+/// Why a bake cannot start.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum BakeError {
+    #[error("cell size must be {MIN_CELL_SIZE_M} to {MAX_CELL_SIZE_M} metres, got {0}")]
+    CellSize(f64),
+    #[error("eye heights must satisfy 0 <= low <= high, got {0}..{1}")]
+    Eye(f64, f64),
+    #[error("--max-vos must be 1..=10, got {0}")]
+    MaxVos(usize),
+    #[error("--slices must be 1..=5, got {0}")]
+    Slices(u8),
+    #[error("the scene has no objects")]
+    EmptyScene,
+    #[error("the grid would have {0} cells, more than 2^31; use larger cells")]
+    TooManyCells(u64),
+    /// The grid's per-cell tables would not fit in memory ([`super::budget`]).
+    #[error("{0}")]
+    Grid(Box<super::budget::GridTooLarge>),
+}
+
+/// What baking one cell took. Both generators fill `levels`, `dense`, `tried`, `shrunk`,
+/// `dropped`, `checks`, `unquantized` and `hidden_cost`, each in its own sense below;
+/// `proposed_m`, `certified_m`, `stage_ms` and `raised` are the long generator's alone (0 under
+/// the growth). A cell no generator saw (skipped, or with no blocker that may support a VO)
+/// has only `ms` (and `levels` when it had near blockers but no slice).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CellStats {
+    /// Slice levels used (height levels of the frame, ascending), chosen before either
+    /// generator runs.
+    pub levels: Vec<u8>,
+    /// Candidates that hide some occludee by rule 3. Long: the proposals over all slices (each
+    /// segment once, at its highest level), trimmed. Growth: the dense VOs over all slices,
+    /// clipped to the quantization window, at their chain's level.
+    pub dense: usize,
+    /// Long: proposals sent to the exact verifier to be cut into certified pieces. Growth: dense
+    /// VOs the decimation tried to store.
+    pub tried: usize,
+    /// Stored only after a shorter grid segment or a lower level replaced a failed one. Long: of
+    /// the certified pieces stored. Growth: of the VOs tried.
+    pub shrunk: usize,
+    /// Not stored because no grid segment near them, at their level or the lower ones tried,
+    /// passed rule 2 and the verifier. Long: certified pieces sent to quantization. Growth: VOs
+    /// tried.
+    pub dropped: usize,
+    /// Exact verifications run. Long: hidden-part searches of proposals, checks of quantized
+    /// candidates and the sweeps that raise a stored VO. Growth: checks of quantized candidates.
+    pub checks: usize,
+    /// The stored VOs before quantization, in the same order, for measuring what quantization
+    /// costs. Long: the certified piece at its level (before quantization and raising). Growth:
+    /// the dense VO at its chain's level.
+    pub unquantized: Vec<VoGeom>,
+    /// Occludee cost hidden by the stored VOs together (rule 3, within [`Plan::reach`]). Both.
+    pub hidden_cost: u64,
+    /// Long only: length of the proposals sent to the exact verifier, and of the certified
+    /// pieces kept from them, metres (the verifier's completeness).
+    pub proposed_m: f64,
+    pub certified_m: f64,
+    /// Long only: time per stage, ms: hidden maps, proposals, rule-3 weights (with trimming),
+    /// selection with certification.
+    pub stage_ms: [f64; 4],
+    /// Long only: levels the stored VOs were raised by after quantization (rule 2's tighter
+    /// bounds for their own segment).
+    pub raised: usize,
+    /// Time the whole cell took, ms. Both.
+    pub ms: f64,
+}
+
+/// One baked cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellBake {
+    pub id: CellId,
+    /// What the store holds for the cell: skipped (inside a building), or its ground and VOs.
+    pub record: CellRecord,
+    pub stats: CellStats,
+}
+
+/// Everything shared by the cells of one bake.
+pub struct Plan<'s> {
+    pub scene: &'s Scene,
+    pub params: BakeParams,
+    pub frame: Frame,
+    /// Every blocker of the scene (2D), with its R-tree.
+    pub(super) set: BlockerSet,
+    /// The blockers' shared edges, for each slice's boundary edges (the long generator).
+    pub(super) twins: super::hidden::EdgeTwins,
+    /// Each blocker's base and top, metres (local frame).
+    pub(super) base: Vec<f64>,
+    pub(super) top: Vec<f64>,
+    pub occludees: Occludees,
+}
+
+fn pow2_at_least(x: f64) -> f64 {
+    let mut q = 1.0f64 / 1024.0;
+    while q < x {
+        q *= 2.0;
+    }
+    q
+}
+
+impl<'s> Plan<'s> {
+    pub fn new(scene: &'s Scene, params: BakeParams) -> Result<Plan<'s>, BakeError> {
+        let size = params.cell_size;
+        if !(size.is_finite() && (MIN_CELL_SIZE_M..=MAX_CELL_SIZE_M).contains(&size)) {
+            return Err(BakeError::CellSize(size));
+        }
+        let (e0, e1) = params.eye;
+        if !(e0.is_finite() && e1.is_finite() && 0.0 <= e0 && e0 <= e1) {
+            return Err(BakeError::Eye(e0, e1));
+        }
+        if params.max_vos == 0 || params.max_vos > MAX_VOS_PER_CELL {
+            return Err(BakeError::MaxVos(params.max_vos));
+        }
+        if let Slices::Fixed(n) = params.slices {
+            if n == 0 || n > 5 {
+                return Err(BakeError::Slices(n));
+            }
+        }
+        let ext = scene.extent();
+        if ext.is_empty() {
+            return Err(BakeError::EmptyScene);
+        }
+        // Grid corners on whole metres, so cell centres and the quantization grid are dyadic.
+        let (min_x, min_y) = (ext.min.x.floor(), ext.min.y.floor());
+        let nx = ((ext.max.x - min_x) / size).floor() as u64 + 1;
+        let ny = ((ext.max.y - min_y) / size).floor() as u64 + 1;
+        // Before anything is allocated per cell: the grid's tables must fit in memory.
+        super::budget::check(scene, nx, ny, size).map_err(BakeError::Grid)?;
+        if nx * ny > 1 << 31 {
+            return Err(BakeError::TooManyCells(nx * ny));
+        }
+        let base: Vec<f64> = scene.blockers.iter().map(|b| b.base).collect();
+        let top: Vec<f64> = scene.blockers.iter().map(|b| b.top).collect();
+        let (bmin, bmax) = base
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &b| {
+                (l.min(b), h.max(b))
+            });
+        let (ground_z0, ground_step) = if base.is_empty() {
+            (ext.min.z, 0.0)
+        } else if bmin == bmax {
+            (bmin, 0.0)
+        } else {
+            (
+                bmin,
+                pow2_at_least(((bmax - bmin) / 255.0).max(GROUND_STEP_M)),
+            )
+        };
+        let quantum = pow2_at_least((0.5 * size + params.search_m) / (QUANT_STEPS / 2) as f64);
+        let frame = Frame {
+            origin: scene.origin.to_array(),
+            grid: GridDescriptor {
+                min_x,
+                min_y,
+                cell_size: size,
+                nx: nx as u32,
+                ny: ny as u32,
+            },
+            quantum,
+            eye_lo: e0,
+            eye_hi: e1,
+            ground_z0,
+            ground_step,
+            h0: H0_M,
+            h_ratio: H_RATIO,
+        };
+        let set = BlockerSet::new(
+            scene.blockers.iter().map(|b| b.polygon.clone()).collect(),
+            scene.blockers.iter().map(|b| b.top - b.base).collect(),
+        )
+        .with_objects(scene.blockers.iter().map(|b| b.object).collect());
+        Ok(Plan {
+            scene,
+            frame,
+            twins: super::hidden::EdgeTwins::new(&set.polys),
+            set,
+            base,
+            top,
+            occludees: Occludees::from_scene(scene),
+            params,
+        })
+    }
+
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    pub fn params(&self) -> &BakeParams {
+        &self.params
+    }
+
+    /// How far from a cell's centre its bake reads the scene (metres, per axis): the search
+    /// distance of the usable blockers past the cell, and the occludees weighed within this
+    /// distance.
+    pub fn reach(&self) -> f64 {
+        (self.params.search_m + self.frame.grid.cell_size).max(self.params.weigh_m)
+    }
+
+    /// The cells to bake, ascending: those meeting the region and the walkable area, when
+    /// given (the others stay empty in the store: no VOs, so the culler keeps everything).
+    pub fn cells(&self) -> Vec<CellId> {
+        let g = &self.frame.grid;
+        (0..g.cell_count() as u32)
+            .filter(|&id| match (self.params.region, g.cell_rect(id)) {
+                (Some(r), Some(c)) => c[0] <= r[2] && c[2] >= r[0] && c[1] <= r[3] && c[3] >= r[1],
+                _ => true,
+            })
+            .filter(|&id| match (&self.params.walkable, g.cell_rect(id)) {
+                (Some(area), Some(c)) => crate::scene::walkable::rect_meets_area(c, area),
+                _ => true,
+            })
+            .collect()
+    }
+
+    /// The cell's polygon, counter-clockwise.
+    pub fn cell_polygon(&self, id: CellId) -> [DVec2; 4] {
+        let [x0, y0, x1, y1] = self.frame.grid.cell_rect(id).unwrap_or([0.0; 4]);
+        [
+            DVec2::new(x0, y0),
+            DVec2::new(x1, y0),
+            DVec2::new(x1, y1),
+            DVec2::new(x0, y1),
+        ]
+    }
+
+    /// The ground level of a cell: the [`GROUND_QUANTILE_PCT`] percentile of the bases of the
+    /// blockers within [`GROUND_RADIUS_M`] (or the least multiple of it by a power of two that
+    /// holds a blocker, up to the search radius), rounded up to a level; level 0 on flat
+    /// ground, and where no blocker stands within the search radius.
+    pub fn ground_level(&self, id: CellId) -> u8 {
+        let f = &self.frame;
+        if !f.per_cell_ground() {
+            return 0;
+        }
+        let cell = self.cell_polygon(id);
+        let mut radius = GROUND_RADIUS_M;
+        let mut bases: Vec<f64> = Vec::new();
+        // Within the cell's reach (ARCHITECTURE.md invariant 13): `cell ± search_m` lies in
+        // `centre ± (search_m + cell size)`.
+        while bases.is_empty() && radius <= self.params.search_m.max(GROUND_RADIUS_M) {
+            let r = DVec2::splat(radius);
+            bases = self
+                .set
+                .in_box(cell[0] - r, cell[2] + r)
+                .map(|i| self.base[i as usize])
+                .collect();
+            radius *= 2.0;
+        }
+        if bases.is_empty() {
+            return 0;
+        }
+        bases.sort_by(f64::total_cmp);
+        let m = bases[(bases.len() - 1) * GROUND_QUANTILE_PCT / 100];
+        ((m - f.ground_z0) / f.ground_step).ceil().clamp(0.0, 255.0) as u8
+    }
+
+    /// Bakes one cell.
+    pub fn bake_cell(&self, id: CellId) -> CellBake {
+        let t0 = Instant::now();
+        let mut stats = CellStats::default();
+        let record = self.bake_record(id, &mut stats);
+        stats.ms = t0.elapsed().as_secs_f64() * 1e3;
+        CellBake { id, record, stats }
+    }
+
+    /// The cell's record: its setup, then the generator the parameters name.
+    fn bake_record(&self, id: CellId, stats: &mut CellStats) -> CellRecord {
+        let c = match CellSetup::new(self, id) {
+            Ok(c) => c,
+            Err(record) => return record,
+        };
+        stats.levels = c.slices.clone();
+        match self.params.generator {
+            Generator::Long => super::long::long_vos(self, &c, stats),
+            Generator::Growth => super::growth::growth_vos(self, &c, stats),
+        }
+    }
+}
+
+/// Bakes `cells` in parallel on the current rayon pool; `progress(done)` is called as cells
+/// finish. Results come in the order of `cells`.
+pub fn bake_cells(
+    plan: &Plan,
+    cells: &[CellId],
+    progress: &(dyn Fn(usize) + Sync),
+) -> Vec<CellBake> {
+    let done = AtomicUsize::new(0);
+    cells
+        .par_iter()
+        .map(|&id| {
+            let r = plan.bake_cell(id);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            r
+        })
+        .collect()
+}
+
+/// The stored record of every cell of the grid, in id order: baked cells from `baked`, the rest
+/// empty.
+pub fn records(frame: &Frame, baked: &[CellBake]) -> Vec<CellRecord> {
+    let mut out = vec![CellRecord::EMPTY; frame.grid.cell_count() as usize];
+    for c in baked {
+        if let Some(slot) = out.get_mut(c.id as usize) {
+            *slot = c.record;
+        }
+    }
+    out
+}
+
+/// The store's bytes for a bake: [`records`], encoded.
+pub fn encode(frame: &Frame, baked: &[CellBake]) -> Result<Vec<u8>, FormatError> {
+    encode_store(frame, &records(frame, baked))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Square footprints `[x, y, side]` (world metres) with bases and heights, as GeoJSON.
+    fn squares(items: &[([f64; 3], f64, f64)]) -> Scene {
+        let feats: Vec<String> = items
+            .iter()
+            .map(|&([x, y, d], base, h)| {
+                format!(
+                    r#"{{"type":"Feature","properties":{{"h":{h},"b":{base}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]]}}}}"#,
+                    x + d,
+                    x + d,
+                    y + d,
+                    y + d
+                )
+            })
+            .collect();
+        let text = format!(
+            r#"{{"type":"FeatureCollection","features":[{}]}}"#,
+            feats.join(",")
+        );
+        let opts = crate::scene::ReadOptions {
+            height_attr: Some("h".into()),
+            base_attr: Some("b".into()),
+            ..Default::default()
+        };
+        crate::scene::load_bytes(&[("squares.geojson".into(), text.as_bytes())], &opts).unwrap()
+    }
+
+    /// The regression: a cell with no building within 50 m stood on the scene's lowest ground
+    /// (level 0), under the bases of the buildings around it, whose VOs then failed rule 2's base
+    /// test (Den Haag's empty cells beside its raised streets got no VO). It now takes the ground
+    /// of the nearest buildings, within the first radius of 100, 200, 400, 800 m that holds one.
+    #[test]
+    fn a_cell_with_no_building_near_stands_on_the_ground_of_the_nearest() {
+        // A building on low ground (base 0) at the west end; buildings on ground 6 m higher
+        // from 80 m east of the empty cell x in [200, 300) on; the scene starts at x = 0.
+        let s = squares(&[
+            ([0.0, 0.0, 20.0], 0.0, 10.0),
+            ([380.0, 0.0, 20.0], 6.0, 10.0),
+            ([380.0, 40.0, 20.0], 6.0, 10.0),
+            ([380.0, 80.0, 20.0], 6.0, 10.0),
+        ]);
+        let plan = Plan::new(&s, BakeParams::default()).unwrap();
+        let f = &plan.frame;
+        assert!(f.per_cell_ground());
+        let at = |x: f64| {
+            let local = x - s.origin.x;
+            f.grid.cell_at(local, 10.0 - s.origin.y).unwrap()
+        };
+        // Beside the low building: its own ground. Beside the raised ones: theirs.
+        assert_eq!(f.ground_z(plan.ground_level(at(10.0))), 0.0);
+        let raised = plan.ground_level(at(390.0));
+        assert!(
+            (f.ground_z(raised) - 6.0).abs() < f.ground_step,
+            "{}",
+            f.ground_z(raised)
+        );
+        // The empty cell: nothing within 50 m; within 100 m, the raised buildings alone.
+        assert_eq!(plan.ground_level(at(250.0)), raised);
+    }
+}
