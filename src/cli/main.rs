@@ -51,8 +51,7 @@ struct Cli {
 enum Command {
     /// Bake a scene into an occluder store: at most 10 virtual occluders per view cell.
     Bake(bake::BakeArgs),
-    /// Describe a store (2.0 or 1.0): version, scene, grid, frame, VOs per cell, bytes; one
-    /// cell's VOs with their stored fields; or every cell.
+    /// Describe a store (2.0 or 1.0), one cell's VOs with their stored fields, or every cell.
     Inspect(store::InspectArgs),
     /// Build the potentially visible set of one cell from a store and the scene's objects.
     Pvs {
@@ -143,8 +142,9 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Join the shards of one bake (`bake --shard I/N`) into the store a single bake writes
-    /// (shards recording another frame or scene are refused).
+    /// Join the shards of one bake (`bake --shard I/N`) into the store a single bake writes.
+    ///
+    /// Shards recording another frame, scene or set of options are refused.
     Merge {
         /// Shard store files.
         #[arg(required = true)]
