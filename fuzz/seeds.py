@@ -59,18 +59,24 @@ def doc_hex(name):
 
 # --- store and blob ---------------------------------------------------------------------------
 
-store = doc_hex("store")
-put("store", store, "doc")
-frame = store[16:128]
-for b in ("blob-cell0", "blob-cell1"):
-    blob = doc_hex(b)
-    put("blob", blob, "doc")
-    put("blob", frame + blob, "doc-framed")
+# The worked examples of both versions (2.0, and the 1.0 of section 12 that 2.0 still reads).
+for st_name, blobs in (("store", ("blob-cell0", "blob-cell1")),
+                       ("store-1.0", ("blob-1.0-cell0", "blob-1.0-cell1"))):
+    store = doc_hex(st_name)
+    put("store", store, "doc")
+    frame = store[16:128]
+    for b in blobs:
+        blob = doc_hex(b)
+        put("blob", blob, "doc")
+        put("blob", frame + blob, "doc-framed")
+
 
 def cells_to_export(st):
     """Up to 6 cells of a store: the first ones with VOs, one skipped, one empty."""
     nx, ny = (int.from_bytes(st[o:o + 4], "little") for o in (64, 68))
-    index = st[136:136 + nx * ny]
+    major = int.from_bytes(st[8:10], "little")
+    start = 136 if major == 1 else 136 + 13 + st[148]
+    index = st[start:start + nx * ny]
     vos = [i for i, v in enumerate(index) if 0 < v <= 10][:4]
     skipped = [i for i, v in enumerate(index) if v == 255][:1]
     empty = [i for i, v in enumerate(index) if v == 0][:1]
@@ -94,7 +100,7 @@ with tempfile.TemporaryDirectory() as tmp:
             bl = os.path.join(tmp, f"{tag}-{cell}.blob")
             subprocess.run([VOCC, "export", path, "--cell", str(cell), "--blob", bl],
                            check=True, capture_output=True)
-            fr = os.path.join(tmp, f"{tag}-{cell}.frame")
+            fr = bl + ".frame"  # export --blob FILE writes the frame to FILE.frame
             put("blob", open(fr, "rb").read() + open(bl, "rb").read(), f"{tag}-framed")
     small = os.path.join(tmp, "small.geojson")
     subprocess.run([VOCC, "gen-city", "--buildings", "6", "--seed", "5", "-o", small],

@@ -5,12 +5,15 @@
 //! typed error the library gives for bad input ([`FormatError`], [`LoadError`]).
 //! Invariants checked beyond "no panic" (a violated one panics, which the fuzzer reports):
 //! - store and blob: each input runs as given, then with its checksum made right, so mutations
-//!   reach the rules behind the checksum;
-//! - store: every cell of a parsed store reads without error; the store re-encodes to the same
-//!   bytes (minor version and checksum aside); each cell's blob round-trips; the culler returns
-//!   ascending in-range ids and never culls a box that contains the cell;
-//! - blob: an accepted blob re-encodes to the same bytes, an accepted frame to the same 112 bytes;
-//!   the culler's invariants as for the store;
+//!   reach the rules behind the checksum; both majors are read (2.0 and 1.0);
+//! - store: every cell of a parsed store reads without error; a 2.0 store re-encodes to the same
+//!   bytes (minor version and checksum aside), a 1.0 store's records to the same 1.0 index and
+//!   payload bytes (canonical in its own layout) and to a 2.0 store that reads back the same
+//!   records (unless its frame passes rule F12 at level 15 only, FORMAT.md 4.1, which no 2.0
+//!   store or blob may carry); each cell's 2.0 blob round-trips; the culler returns ascending in-range ids and never
+//!   culls a box that contains the cell;
+//! - blob: an accepted blob re-encodes to the same bytes in its own major, an accepted frame to
+//!   the same 112 bytes; the culler's invariants as for the store;
 //! - scene: object indices follow input order, boxes are finite and not empty, every blocker is
 //!   a strictly convex counter-clockwise polygon or a 2-vertex wall, with finite coordinates
 //!   and `base < top`;
@@ -21,8 +24,8 @@
 use crate::runtime::crc::crc32;
 use crate::runtime::culler::{pvs, BoxTree};
 use crate::runtime::format::{
-    decode_blob, decode_frame, encode_blob, encode_frame, encode_store, CellRecord, FormatError,
-    Store, FRAME_LEN, HEADER_LEN,
+    decode_blob, decode_frame, encode_blob, encode_frame, encode_store, encode_store_with,
+    validate_frame, CellRecord, FormatError, Store, FRAME_LEN, HEADER_LEN,
 };
 use crate::runtime::{CellId, Frame, GridDescriptor};
 
@@ -75,22 +78,60 @@ fn store_once(data: &[u8]) -> Result<u32, FormatError> {
     let f = *s.frame();
     let n = s.cell_count();
     // Parse checked the length: one index byte per cell, so this is bounded by the input.
+    // A 2.0 store's frame passes the rules of a frame on its own; a 1.0 store's may not (F12
+    // at level 15 only, FORMAT.md 4.1): then it has no 2.0 blobs or 2.0 store.
+    let frame_alone = validate_frame(&f);
+    assert!(
+        s.major() == 1 || frame_alone.is_ok(),
+        "a 2.0 store's frame: {frame_alone:?}"
+    );
     let mut cells = Vec::with_capacity(n as usize);
     for id in 0..n {
         let rec = s
             .cell(id)
             .unwrap_or_else(|e| panic!("cell {id} of a parsed store: {e}"));
-        let blob = encode_blob(&f, id, &rec)
-            .unwrap_or_else(|e| panic!("cell {id} of a parsed store does not encode: {e}"));
-        assert_eq!(decode_blob(&f, &blob), Ok((id, rec)), "cell {id}'s blob");
+        if frame_alone.is_ok() {
+            let blob = encode_blob(&f, id, &rec)
+                .unwrap_or_else(|e| panic!("cell {id} of a parsed store does not encode: {e}"));
+            assert_eq!(decode_blob(&f, &blob), Ok((id, rec)), "cell {id}'s blob");
+        }
         cells.push(rec);
     }
     assert!(s.cell(n).is_err(), "a cell past the grid must be an error");
-    let again = encode_store(&f, &cells).expect("an accepted store re-encodes");
-    assert_eq!(again.len(), data.len(), "re-encoded length");
-    assert_eq!(again[..10], data[..10], "magic and major");
-    assert_eq!(again[12..132], data[12..132], "flags, frame, payload_len");
-    assert_eq!(again[136..], data[136..], "index, block table, payload");
+    if s.major() == 2 {
+        let again = encode_store_with(&f, &cells, &s.scene_section())
+            .expect("an accepted store re-encodes");
+        assert_eq!(again.len(), data.len(), "re-encoded length");
+        assert_eq!(again[..10], data[..10], "magic and major");
+        assert_eq!(again[12..132], data[12..132], "flags, frame, payload_len");
+        assert_eq!(
+            again[136..],
+            data[136..],
+            "scene section, index, block table, payload"
+        );
+    } else {
+        // 1.0: canonical in its own layout (the index and payload its records give), and the
+        // same records as a 2.0 store, unless its frame's top of level 31 is not finite (F12).
+        let index = HEADER_LEN + n as usize;
+        let payload = index + 4 * (n as usize).div_ceil(64);
+        let idx: Vec<u8> = cells.iter().map(|r| r.index_byte()).collect();
+        assert_eq!(data[HEADER_LEN..index], idx[..], "1.0 index");
+        let mut p = Vec::new();
+        for rec in &cells {
+            push_v1_record(&mut p, &f, rec);
+        }
+        assert_eq!(data[payload..], p[..], "1.0 payload");
+        match encode_store(&f, &cells) {
+            Ok(v2) => {
+                let s2 = Store::parse(&v2).expect("a 1.0 store's records encode as 2.0");
+                for (id, rec) in cells.iter().enumerate() {
+                    assert_eq!(s2.cell(id as CellId).as_ref(), Ok(rec), "cell {id} in 2.0");
+                }
+            }
+            Err(FormatError::BadFrame(r)) if frame_alone.is_err() && r.starts_with("F12") => {}
+            Err(e) => panic!("a 1.0 store's records do not encode as 2.0: {e}"),
+        }
+    }
     let with_vos = cells
         .iter()
         .enumerate()
@@ -132,13 +173,40 @@ fn blob_with(f: &Frame, bytes: &[u8]) -> Result<CellId, FormatError> {
 
 fn blob_once(f: &Frame, bytes: &[u8]) -> Result<CellId, FormatError> {
     let (id, rec) = decode_blob(f, bytes)?;
-    assert_eq!(
-        encode_blob(f, id, &rec).as_deref(),
-        Ok(bytes),
-        "an accepted blob re-encodes"
-    );
+    if bytes.get(4) == Some(&1) {
+        // 1.0: the same bytes in its own layout; and a 2.0 blob of the same record.
+        let mut v1 = b"VOCB\x01".to_vec();
+        v1.extend_from_slice(&id.to_le_bytes());
+        v1.push(rec.index_byte());
+        push_v1_record(&mut v1, f, &rec);
+        v1.extend_from_slice(&crc32(&v1).to_le_bytes());
+        assert_eq!(v1, bytes, "an accepted 1.0 blob re-encodes");
+        let v2 = encode_blob(f, id, &rec).expect("a 1.0 blob's record encodes as 2.0");
+        assert_eq!(decode_blob(f, &v2), Ok((id, rec)), "a 1.0 blob as 2.0");
+    } else {
+        assert_eq!(
+            encode_blob(f, id, &rec).as_deref(),
+            Ok(bytes),
+            "an accepted blob re-encodes"
+        );
+    }
     check_culler(f, id, &rec);
     Ok(id)
+}
+
+/// A record as 1.0 stores it (FORMAT.md section 12): the ground byte when the frame has one,
+/// then 5 bytes per VO. Only for records a 1.0 decoder gave.
+fn push_v1_record(out: &mut Vec<u8>, f: &Frame, rec: &CellRecord) {
+    if rec.vos().is_empty() {
+        return;
+    }
+    if f.per_cell_ground() {
+        out.push(rec.ground());
+    }
+    for q in rec.vos() {
+        assert!(q.fits_v1(), "a 1.0 decoder gave {q:?}");
+        out.extend_from_slice(&q.to_bytes_v1());
+    }
 }
 
 /// Runs the culler on cell `id` over boxes around it: the ids come out ascending and in range,

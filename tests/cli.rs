@@ -192,6 +192,22 @@ fn bake_then_inspect_pvs_and_export() {
     assert!(v["vos"].as_u64().unwrap() >= 9, "{v}");
     assert_eq!(v["cells"], 228);
     assert_eq!(v["bytes"], std::fs::metadata(&store).unwrap().len());
+    // Format 2.0, with the scene it was baked from (FORMAT.md 5.2).
+    assert_eq!(v["version"], "2.0");
+    assert_eq!(v["objects"], 2576);
+    let fingerprint = v["scene"].as_str().unwrap();
+    assert_eq!(fingerprint.len(), 16);
+    assert_ne!(u64::from_str_radix(fingerprint, 16).unwrap(), 0);
+    assert_eq!(v["crs"], "");
+    assert_eq!(v["vo_top_levels_above_eye_m"].as_array().unwrap().len(), 32);
+    let text = String::from_utf8_lossy(&vocc(&["inspect", s]).stdout).into_owned();
+    assert!(text.contains(": vocc store 2.0, "), "{text}");
+    assert!(
+        text.contains(&format!(
+            "scene: baked for 2576 objects; fingerprint {fingerprint}; CRS unknown"
+        )),
+        "{text}"
+    );
 
     // The cell of the README's picture.
     let out = vocc(&[
@@ -256,9 +272,141 @@ fn bake_then_inspect_pvs_and_export() {
     assert!(out.status.success());
     let frame =
         vocc::runtime::decode_frame(&std::fs::read(dir.join("cell.blob.frame")).unwrap()).unwrap();
-    let (bid, rec) = vocc::runtime::decode_blob(&frame, &std::fs::read(&blob).unwrap()).unwrap();
+    let blob = std::fs::read(&blob).unwrap();
+    assert_eq!(blob[4], 2, "export --blob writes 2.0");
+    assert_eq!(blob.len(), 14 + 6 * vos.len());
+    let (bid, rec) = vocc::runtime::decode_blob(&frame, &blob).unwrap();
     assert_eq!(bid as u64, id);
     assert_eq!(rec.vos().len(), vos.len());
+    // Each VO's stored fields and bytes, as the JSON gives them.
+    for (q, v) in rec.vos().iter().zip(vos) {
+        let f = &v["fields"];
+        assert_eq!(
+            [
+                &f["a"]["e"],
+                &f["a"]["x"],
+                &f["a"]["y"],
+                &f["b"]["e"],
+                &f["b"]["x"],
+                &f["b"]["y"]
+            ]
+            .map(|x| x.as_u64().unwrap()),
+            [
+                q.a.e as u64,
+                q.a.x as u64,
+                q.a.y as u64,
+                q.b.e as u64,
+                q.b.x as u64,
+                q.b.y as u64
+            ]
+        );
+        assert_eq!(f["level"], q.level);
+        let hex: String = q.to_bytes().iter().map(|b| format!("{b:02x}")).collect();
+        assert_eq!(v["bytes"], hex);
+    }
+}
+
+/// The bytes of a ```hex example:NAME block of docs/FORMAT.md.
+fn doc_hex(name: &str) -> Vec<u8> {
+    let doc = std::fs::read_to_string(repo("docs/FORMAT.md")).unwrap();
+    let fence = format!("```hex example:{name}\n");
+    let start = doc.find(&fence).unwrap() + fence.len();
+    let end = start + doc[start..].find("```").unwrap();
+    doc[start..end]
+        .lines()
+        .flat_map(|l| {
+            let hex = l.split('#').next().unwrap().split_once(':').unwrap().1;
+            hex.split_whitespace()
+                .map(|t| u8::from_str_radix(t, 16).unwrap())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// `inspect` reads both versions: the version, the scene section (none in 1.0), and per VO its
+/// stored fields, exponents included, and its bytes as the file holds them.
+#[test]
+fn inspect_reads_both_versions_with_the_scene_and_each_vos_fields() {
+    let dir = common::temp_dir("cli-inspect-versions");
+    let (new, old) = (dir.join("doc2.vocc"), dir.join("doc1.vocc"));
+    std::fs::write(&new, doc_hex("store")).unwrap();
+    std::fs::write(&old, doc_hex("store-1.0")).unwrap();
+    let (n, o) = (new.to_str().unwrap(), old.to_str().unwrap());
+    let t = String::from_utf8_lossy(&vocc(&["inspect", n]).stdout).into_owned();
+    assert!(t.contains(": vocc store 2.0, 184 bytes, 3 cells"), "{t}");
+    assert!(
+        t.contains(
+            "scene: baked for 2576 objects; fingerprint 9e3779b97f4a7c15; CRS \"EPSG:2154\""
+        ),
+        "{t}"
+    );
+    let t = String::from_utf8_lossy(&vocc(&["inspect", o]).stdout).into_owned();
+    assert!(t.contains(": vocc store 1.0, 154 bytes, 3 cells"), "{t}");
+    assert!(
+        t.contains("scene: object count not recorded; fingerprint not recorded; CRS unknown"),
+        "{t}"
+    );
+    let j: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", o, "--json"]).stdout).unwrap();
+    assert_eq!(
+        (&j["version"], &j["objects"], &j["scene"], &j["crs"]),
+        (
+            &serde_json::json!("1.0"),
+            &serde_json::json!(0),
+            &serde_json::json!("0000000000000000"),
+            &serde_json::json!("")
+        )
+    );
+    assert_eq!(j["vo_top_levels_above_eye_m"].as_array().unwrap().len(), 16);
+    // Cell 0 of the 2.0 example: the far VO's exponents 3, the mixed one's 0 and 2.
+    let t = String::from_utf8_lossy(&vocc(&["inspect", n, "--cell", "0"]).stdout).into_owned();
+    assert!(t.contains("cell 0: "), "{t}");
+    assert!(
+        t.contains("  VO 1: (842802.000, 6518650.000) - (843402.000, 6518650.000), 600.0 m long, 162.00..506.94 m, level 20; a (e 3, x 194, y 406), b (e 3, x 344, y 406), bytes 136679582d53"),
+        "{t}"
+    );
+    assert!(
+        t.contains("level 16; a (e 0, x 376, y 346), b (e 2, x 286, y 456), bytes c0ab551e9143"),
+        "{t}"
+    );
+    let j: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", n, "--cell", "0", "--json"]).stdout).unwrap();
+    let v = &j["vos"][2];
+    assert_eq!(
+        v["fields"]["b"],
+        serde_json::json!({"e": 2, "x": 286, "y": 456})
+    );
+    assert_eq!(
+        (&v["a"], &v["b"]),
+        (
+            &serde_json::json!([843110.0, 6518095.0]),
+            &serde_json::json!([843110.0, 6518450.0])
+        )
+    );
+    // The 1.0 VO's bytes are its 5 stored bytes.
+    let j: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", o, "--cell", "0", "--json"]).stdout).unwrap();
+    assert_eq!(j["vos"][0]["bytes"], "c4f042c55b");
+    assert_eq!(
+        j["vos"][0]["fields"]["a"],
+        serde_json::json!({"e": 0, "x": 196, "y": 376})
+    );
+    // The same wall in both versions.
+    let j2: serde_json::Value =
+        serde_json::from_slice(&vocc(&["inspect", n, "--cell", "0", "--json"]).stdout).unwrap();
+    for k in ["a", "b", "bottom", "top", "level"] {
+        assert_eq!(j["vos"][0][k], j2["vos"][0][k], "{k}");
+    }
+    // export --blob of a 1.0 store writes a 2.0 blob of the same record.
+    let blob = dir.join("c0.blob");
+    let out = vocc(&["export", o, "--cell", "0", "--blob", blob.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let b = std::fs::read(&blob).unwrap();
+    assert_eq!((b[4], b.len()), (2, 14 + 1 + 12));
 }
 
 #[test]
@@ -872,7 +1020,22 @@ fn merge_of_an_incomplete_or_repeated_set_of_shards_is_refused() {
     let (rc, err) = run(&["merge", &sh[0], &sh[1], &whole, "-o", mo]);
     assert_eq!(rc, Some(1), "{err}");
     assert!(err.contains("is not a shard"), "{err}");
-    // The complete set merges into the whole bake, byte for byte.
+    // A shard that records another scene (here: another object count) is refused.
+    let mut other = std::fs::read(&sh[1]).unwrap();
+    other[136] ^= 1;
+    other[132..136].fill(0);
+    let crc = vocc::runtime::crc::crc32(&other);
+    other[132..136].copy_from_slice(&crc.to_le_bytes());
+    let ox = dir.join("other.vocc");
+    std::fs::write(&ox, &other).unwrap();
+    let (rc, err) = run(&["merge", &sh[0], ox.to_str().unwrap(), &sh[2], "-o", mo]);
+    assert_eq!(rc, Some(1), "{err}");
+    assert!(
+        err.contains("records another scene than") && err.contains("objects 65 and 64"),
+        "{err}"
+    );
+    assert!(!m.exists(), "no output after a refused merge");
+    // The complete set merges into the whole bake, byte for byte, scene section included.
     let (rc, err) = run(&["merge", &sh[2], &sh[0], &sh[1], "-o", mo]);
     assert_eq!(rc, Some(0), "{err}");
     assert_eq!(std::fs::read(&m).unwrap(), std::fs::read(&whole).unwrap());
@@ -1025,6 +1188,8 @@ fn inspect_cell_json_differs_from_text_and_cells_lists_every_cell() {
     assert_eq!(j["cell"], 24);
     let n_vos = j["vos"].as_array().unwrap().len();
     assert_eq!(t.matches("  VO ").count(), n_vos, "{t}");
+    // Each VO line gives its stored fields, exponents included.
+    assert_eq!(t.matches("; a (e ").count(), n_vos, "{t}");
 
     let all: serde_json::Value =
         serde_json::from_slice(&vocc(&["inspect", &store, "--cells", "--json"]).stdout).unwrap();
@@ -1034,10 +1199,10 @@ fn inspect_cell_json_differs_from_text_and_cells_lists_every_cell() {
     let summary: serde_json::Value =
         serde_json::from_slice(&vocc(&["inspect", &store, "--json"]).stdout).unwrap();
     assert_eq!(total, summary["vos"].as_u64().unwrap());
-    // Bytes per cell: index byte + 5 per VO (+ a ground byte on uneven ground, not here).
+    // Bytes per cell: index byte + 6 per VO (+ a ground byte on uneven ground, not here).
     assert!(cells
         .iter()
-        .all(|c| c["bytes"].as_u64().unwrap() == 1 + 5 * c["vos"].as_u64().unwrap()));
+        .all(|c| c["bytes"].as_u64().unwrap() == 1 + 6 * c["vos"].as_u64().unwrap()));
     let top: serde_json::Value = serde_json::from_slice(
         &vocc(&[
             "inspect",

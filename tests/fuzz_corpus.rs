@@ -12,6 +12,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use vocc::fuzzing;
+use vocc::runtime::{decode_blob, decode_frame, Store};
 
 /// Runs `entry` on every file of `fuzz/corpus/<target>`; returns (files, accepted).
 fn replay<E: std::fmt::Display>(
@@ -55,17 +56,50 @@ fn name(p: &Path) -> String {
     p.file_name().unwrap_or_default().to_string_lossy().into()
 }
 
+/// How many files of `fuzz/corpus/<target>/` are accepted as version 1 and 2 by `major`.
+fn accepted_majors(target: &str, major: impl Fn(&[u8]) -> Option<u16>) -> [usize; 2] {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/corpus")
+        .join(target);
+    let mut n = [0; 2];
+    for e in std::fs::read_dir(dir).expect("corpus") {
+        let bytes = std::fs::read(e.expect("entry").path()).expect("read");
+        match major(&bytes) {
+            Some(1) => n[0] += 1,
+            Some(2) => n[1] += 1,
+            _ => {}
+        }
+    }
+    n
+}
+
 #[test]
 fn store_corpus() {
     let (n, ok) = replay("store", |b| fuzzing::store(b).map(drop));
-    // Seeds include valid stores (FORMAT.md's example and bakes), so some must be accepted.
+    // Seeds include valid stores (FORMAT.md's examples and bakes), so some must be accepted,
+    // of both versions.
     assert!(ok > 0, "none of {n} store files was accepted");
+    let [v1, v2] = accepted_majors("store", |b| Store::parse(b).ok().map(|s| s.major()));
+    assert!(
+        v1 > 0 && v2 > 0,
+        "accepted stores: {v1} of 1.0, {v2} of 2.0"
+    );
 }
 
 #[test]
 fn blob_corpus() {
     let (n, ok) = replay("blob", |b| fuzzing::blob(b).map(drop));
     assert!(ok > 0, "none of {n} blob files was accepted");
+    // Framed blobs of both versions decode with their own frame.
+    let [v1, v2] = accepted_majors("blob", |b| {
+        let (frame, blob) = b.split_at_checked(112)?;
+        decode_blob(&decode_frame(frame).ok()?, blob).ok()?;
+        Some(blob[4] as u16)
+    });
+    assert!(
+        v1 > 0 && v2 > 0,
+        "accepted framed blobs: {v1} of 1.0, {v2} of 2.0"
+    );
 }
 
 #[test]

@@ -18,7 +18,9 @@ use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 use vocc::runtime::crc::crc32;
-use vocc::runtime::{encode_store, CellRecord, Frame, GridDescriptor, QPoint, QVo, Store};
+use vocc::runtime::{
+    encode_store_with, CellRecord, Frame, GridDescriptor, QPoint, QVo, SceneSection, Store,
+};
 use vocc::scene::{load_bytes, walkable, LoadError, LoadErrorKind, Location, ReadOptions, Scene};
 
 fn vocc(args: &[&str]) -> Output {
@@ -66,7 +68,14 @@ fn frame() -> Frame {
     }
 }
 
-/// Cells with 0 to 3 VOs and some skipped: every kind of record.
+/// The CRS name the hostile store records: 9 bytes, so its index starts at 149 + 9 = 158.
+const CRS: &str = "EPSG:2154";
+/// Where the hostile store's index starts.
+const INDEX: usize = 136 + 13 + CRS.len();
+
+/// Cells with 0 to 3 VOs and some skipped: every kind of record; VOs near (exponent 0) and far
+/// (an endpoint of exponent 1 to 3, canonical), of levels 0 to 31. A 2.0 store with a scene
+/// section.
 fn store_bytes() -> Vec<u8> {
     let cells: Vec<CellRecord> = (0..80u16)
         .map(|i| match i % 5 {
@@ -76,15 +85,41 @@ fn store_bytes() -> Vec<u8> {
                 let vos: Vec<QVo> = (0..k - 1)
                     .map(|j| QVo {
                         a: QPoint::fine(100 + i, 376),
-                        b: QPoint::fine(300 + j, 376 - j),
-                        level: (i % 16) as u8,
+                        b: QPoint {
+                            e: (j % 4) as u8,
+                            x: 300 + j,
+                            y: 100 - j,
+                        },
+                        level: (i % 32) as u8,
                     })
                     .collect();
                 CellRecord::new((i % 7) as u8, &vos).unwrap()
             }
         })
         .collect();
-    encode_store(&frame(), &cells).unwrap()
+    let scene = SceneSection {
+        objects: 1,
+        scene: 0x1234_5678_9abc_def0,
+        crs: CRS,
+    };
+    encode_store_with(&frame(), &cells, &scene).unwrap()
+}
+
+/// The bytes of a ```hex example:NAME block of docs/FORMAT.md.
+fn doc_hex(name: &str) -> Vec<u8> {
+    let doc = std::fs::read_to_string(common::repo("docs/FORMAT.md")).unwrap();
+    let fence = format!("```hex example:{name}\n");
+    let start = doc.find(&fence).unwrap() + fence.len();
+    let end = start + doc[start..].find("```").unwrap();
+    doc[start..end]
+        .lines()
+        .flat_map(|l| {
+            let hex = l.split('#').next().unwrap().split_once(':').unwrap().1;
+            hex.split_whitespace()
+                .map(|t| u8::from_str_radix(t, 16).unwrap())
+                .collect::<Vec<_>>()
+        })
+        .collect()
 }
 
 fn fix_crc(b: &mut [u8]) {
@@ -120,7 +155,8 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
         assert_refused(&pvs(p), want, what);
     };
 
-    // Truncated anywhere: the header, the index, the block table, the payload.
+    // Truncated anywhere: the header, the scene section, the index, the block table, the
+    // payload.
     let n = good.len();
     for len in [
         0,
@@ -130,8 +166,12 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
         135,
         136,
         137,
-        136 + 80,
-        136 + 80 + 8,
+        148,
+        149,
+        152,
+        INDEX,
+        INDEX + 80,
+        INDEX + 80 + 8,
         n / 2,
         n - 1,
     ] {
@@ -166,6 +206,43 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
     refused(&b, "bytes needed", "2^31 cells");
     refused(&set_u32(64, u32::MAX), "F4", "nx = u32::MAX");
     refused(&set_u32(64, 0), "F3", "nx = 0");
+    // The rules of 2.0, with the checksum made right: a CRS name that is not UTF-8, or one
+    // that claims more bytes than the file has; a VO's reserved bit; a non-canonical endpoint.
+    let set = |at: usize, v: u8| {
+        let mut b = good.clone();
+        b[at] = v;
+        fix_crc(&mut b);
+        b
+    };
+    refused(
+        &set(151, 0xff),
+        "the CRS name is not UTF-8 (at offset 151)",
+        "CRS 0xff",
+    );
+    refused(&set(148, 200), "truncated", "crs_len = 200");
+    // Cell 2, with one VO, starts the payload: its ground byte, then VO 0.
+    let payload = INDEX + 80 + 8;
+    refused(
+        &set(payload + 1 + 5, good[payload + 1 + 5] | 0x80),
+        &format!(
+            "VO 0 of cell 2 at offset {} sets the reserved bit 47",
+            payload + 1
+        ),
+        "reserved bit",
+    );
+    let mut b = good.clone();
+    let non_canonical = QVo {
+        a: QPoint {
+            e: 2,
+            x: 256,
+            y: 300,
+        },
+        b: QPoint::fine(1, 2),
+        level: 3,
+    };
+    b[payload + 1..payload + 7].copy_from_slice(&non_canonical.to_bytes());
+    fix_crc(&mut b);
+    refused(&b, "endpoint a is not canonical", "non-canonical endpoint");
 
     // Every single-bit flip, one per byte (bit = offset mod 8), through `inspect`: the checksum
     // or a header rule catches each.
@@ -196,6 +273,40 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
         &vocc(&["inspect", dir.join("missing.vocc").to_str().unwrap()]),
         "cannot read",
         "missing file",
+    );
+
+    // A 1.0 store (FORMAT.md section 12) is read; damaged, it is refused like a 2.0 one: every
+    // single-bit flip, a truncation in each part, a trailing byte.
+    let v1 = doc_hex("store-1.0");
+    std::fs::write(&path, &v1).unwrap();
+    let o = vocc(&["inspect", p]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("vocc store 1.0"));
+    for at in 0..v1.len() {
+        let mut b = v1.clone();
+        b[at] ^= 1 << (at % 8);
+        std::fs::write(&path, &b).unwrap();
+        assert_refused(
+            &vocc(&["inspect", p]),
+            "is not a valid vocc store",
+            &format!("1.0: bit flip at byte {at}"),
+        );
+    }
+    for len in [100, 136, 137, 140, 150, v1.len() - 1] {
+        std::fs::write(&path, &v1[..len]).unwrap();
+        assert_refused(
+            &vocc(&["inspect", p]),
+            "truncated",
+            &format!("1.0 truncated to {len}"),
+        );
+    }
+    let mut long = v1.clone();
+    long.push(0);
+    std::fs::write(&path, &long).unwrap();
+    assert_refused(
+        &vocc(&["inspect", p]),
+        "trailing bytes",
+        "1.0, one trailing byte",
     );
 }
 

@@ -104,6 +104,11 @@
 #define VOCC_FRAME_BYTES 112
 
 /**
+ * Bytes of a `VoccStoreInfo` CRS name, with its terminating NUL.
+ */
+#define VOCC_CRS_LEN 256
+
+/**
  * Scratch memory for PVS queries over trees of up to a given size; one thread at a time.
  */
 typedef struct VoccQuery VoccQuery;
@@ -173,13 +178,47 @@ typedef struct VoccFrame {
 } VoccFrame;
 
 /**
- * One stored VO: endpoint grid indices (0..512) and a height level (0..16).
+ * What a store says about itself (docs/FORMAT.md sections 2 and 5.2): its version, and the
+ * scene it was baked from. A 1.0 store records no scene: objects 0, scene 0, empty CRS.
+ */
+typedef struct VoccStoreInfo {
+  /**
+   * The store's major (2, or 1 for a store written before 2.0) and minor version.
+   */
+  uint16_t major;
+  uint16_t minor;
+  /**
+   * How many objects the store was baked for; 0: not recorded.
+   */
+  uint32_t objects;
+  /**
+   * A fingerprint of the scene it was baked from (opaque); 0: not recorded.
+   */
+  uint64_t scene;
+  /**
+   * Bytes of the CRS name, 0..=255 (0: unknown).
+   */
+  uint32_t crs_len;
+  /**
+   * The CRS name (e.g. "EPSG:3946"), UTF-8, NUL-terminated after `crs_len` bytes.
+   */
+  char crs[VOCC_CRS_LEN];
+} VoccStoreInfo;
+
+/**
+ * One stored VO (docs/FORMAT.md section 3): endpoint 1 is
+ * `centre + (x1 - 256, y1 - 256) * quantum * 2^exp1` of its cell, endpoint 2 likewise with
+ * `x2, y2, exp2`; grid indices 0..512, exponents 0..8 (0 in a 1.0 store), height level 0..32
+ * (0..16 in a 1.0 store). A cell given to the library must hold canonical endpoints: `exp == 0`,
+ * or `x - 256` or `y - 256` outside -128..128 (what every decoded cell holds).
  */
 typedef struct VoccVo {
   uint16_t x1;
   uint16_t y1;
   uint16_t x2;
   uint16_t y2;
+  uint8_t exp1;
+  uint8_t exp2;
   uint8_t level;
 } VoccVo;
 
@@ -215,9 +254,9 @@ extern "C" {
 const char *vocc_version(void);
 
 /**
- * Opens a store from the `len` bytes at `bytes`, checking all of it once (docs/FORMAT.md
- * section 8.1). The bytes are borrowed, not copied: keep them alive and unchanged until
- * `vocc_store_free`. On success `*out` is the store; on failure NULL.
+ * Opens a store of version 2.0 or 1.0 from the `len` bytes at `bytes`, checking all of it
+ * once (docs/FORMAT.md section 8.1). The bytes are borrowed, not copied: keep them alive and
+ * unchanged until `vocc_store_free`. On success `*out` is the store; on failure NULL.
  *
  * # Safety
  * `bytes` points to `len` readable bytes (or `len` is 0); `out` is NULL or writable; `err` is
@@ -243,6 +282,14 @@ void vocc_store_free(struct VoccStore *store);
  * `store` is NULL or a live store; `out` is NULL or writable.
  */
 int32_t vocc_store_frame(const struct VoccStore *store, struct VoccFrame *out);
+
+/**
+ * The store's version and scene section.
+ *
+ * # Safety
+ * `store` is NULL or a live store; `out` is NULL or writable.
+ */
+int32_t vocc_store_info(const struct VoccStore *store, struct VoccStoreInfo *out);
 
 /**
  * Number of cells of the store's grid (nx * ny); 0 for NULL.
@@ -278,8 +325,8 @@ int32_t vocc_frame_decode(const uint8_t *bytes,
                           struct VoccError *err);
 
 /**
- * Decodes and checks one cell's blob (docs/FORMAT.md section 6) against `frame`: `*id` is
- * the cell's id, `*out` its record. Allocates nothing.
+ * Decodes and checks one cell's blob of version 2.0 or 1.0 (docs/FORMAT.md section 6) against
+ * `frame`: `*id` is the cell's id, `*out` its record. Allocates nothing.
  *
  * # Safety
  * `frame` is NULL or readable; `bytes` points to `len` readable bytes (or `len` is 0); `id`,

@@ -13,9 +13,9 @@
 //! - every pointer is checked for NULL before use and every length or count for range before a
 //!   slice is made of it; a required output is written only on success (out-pointers of
 //!   constructors are set to NULL on failure);
-//! - a frame or cell coming from the caller is checked (frame rules F1..F12, VO fields in
-//!   range, no degenerate VO) before the culler sees it, so the culler only runs on what a
-//!   decoder would have accepted;
+//! - a frame or cell coming from the caller is checked (frame rules F1..F12 as a frame on its
+//!   own follows them, VO fields in range, canonical endpoints, no degenerate VO) before the
+//!   culler sees it, so the culler only runs on what a decoder would have accepted;
 //! - the culling path allocates nothing: [`vocc_pvs`] and [`vocc_pvs_bitmap`] run the Rust
 //!   culler into the [`VoccQuery`]'s vector, reserved for the tree when the query is made, and
 //!   copy the result into the caller's buffer;
@@ -102,7 +102,11 @@ pub struct VoccFrame {
     pub h_ratio: f64,
 }
 
-/// One stored VO: endpoint grid indices (0..512) and a height level (0..16).
+/// One stored VO (docs/FORMAT.md section 3): endpoint 1 is
+/// `centre + (x1 - 256, y1 - 256) * quantum * 2^exp1` of its cell, endpoint 2 likewise with
+/// `x2, y2, exp2`; grid indices 0..512, exponents 0..8 (0 in a 1.0 store), height level 0..32
+/// (0..16 in a 1.0 store). A cell given to the library must hold canonical endpoints: `exp == 0`,
+/// or `x - 256` or `y - 256` outside -128..128 (what every decoded cell holds).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct VoccVo {
@@ -110,7 +114,32 @@ pub struct VoccVo {
     pub y1: u16,
     pub x2: u16,
     pub y2: u16,
+    pub exp1: u8,
+    pub exp2: u8,
     pub level: u8,
+}
+
+/// Bytes of a `VoccStoreInfo` CRS name, with its terminating NUL.
+pub const VOCC_CRS_LEN: usize = 256;
+
+const _: () = assert!(VOCC_CRS_LEN == vocc::runtime::format::MAX_CRS_LEN + 1);
+
+/// What a store says about itself (docs/FORMAT.md sections 2 and 5.2): its version, and the
+/// scene it was baked from. A 1.0 store records no scene: objects 0, scene 0, empty CRS.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VoccStoreInfo {
+    /// The store's major (2, or 1 for a store written before 2.0) and minor version.
+    pub major: u16,
+    pub minor: u16,
+    /// How many objects the store was baked for; 0: not recorded.
+    pub objects: u32,
+    /// A fingerprint of the scene it was baked from (opaque); 0: not recorded.
+    pub scene: u64,
+    /// Bytes of the CRS name, 0..=255 (0: unknown).
+    pub crs_len: u32,
+    /// The CRS name (e.g. "EPSG:3946"), UTF-8, NUL-terminated after `crs_len` bytes.
+    pub crs: [c_char; VOCC_CRS_LEN],
 }
 
 /// One cell's record. `skipped` is 1 for a cell inside a building (no VOs: everything is
@@ -302,7 +331,8 @@ impl From<&Frame> for VoccFrame {
     }
 }
 
-/// The caller's frame, checked against rules F1..F12.
+/// The caller's frame, checked against rules F1..F12 as a frame on its own follows them (2.0:
+/// F12 at level 31).
 fn frame_of(f: *const VoccFrame) -> Result<Frame, Fail> {
     let f = get(f, "frame")?;
     let frame = Frame {
@@ -340,6 +370,8 @@ impl From<&CellRecord> for VoccCell {
                 y1: q.a.y,
                 x2: q.b.x,
                 y2: q.b.y,
+                exp1: q.a.e,
+                exp2: q.b.e,
                 level: q.level,
             };
         }
@@ -348,7 +380,7 @@ impl From<&CellRecord> for VoccCell {
 }
 
 /// The caller's cell, checked as a decoder checks a record: at most 10 VOs, fields in range,
-/// no degenerate VO.
+/// canonical endpoints, no degenerate VO.
 fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
     let c = get(c, "cell")?;
     if c.skipped != 0 {
@@ -367,14 +399,28 @@ fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
     }; VOCC_MAX_VOS];
     for (k, (v, q)) in vos.iter().zip(qs.iter_mut()).enumerate() {
         *q = QVo {
-            a: QPoint::fine(v.x1, v.y1),
-            b: QPoint::fine(v.x2, v.y2),
+            a: QPoint {
+                e: v.exp1,
+                x: v.x1,
+                y: v.y1,
+            },
+            b: QPoint {
+                e: v.exp2,
+                x: v.x2,
+                y: v.y2,
+            },
             level: v.level,
         };
-        if !q.in_range() || !q.fits_v1() {
+        if !q.in_range() {
             return Err(fail(
                 VOCC_ERR_ARGUMENT,
-                format!("cell: VO {k} has a field out of range (coordinates 0..512, level 0..16)"),
+                format!("cell: VO {k} has a field out of range (exponents 0..8, coordinates 0..512, level 0..32)"),
+            ));
+        }
+        if !q.is_canonical() {
+            return Err(fail(
+                VOCC_ERR_ARGUMENT,
+                format!("cell: VO {k} has an endpoint that is not canonical (a smaller exponent holds it)"),
             ));
         }
         if q.is_degenerate() {
@@ -404,9 +450,9 @@ pub extern "C" fn vocc_version() -> *const c_char {
     concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr() as *const c_char
 }
 
-/// Opens a store from the `len` bytes at `bytes`, checking all of it once (docs/FORMAT.md
-/// section 8.1). The bytes are borrowed, not copied: keep them alive and unchanged until
-/// `vocc_store_free`. On success `*out` is the store; on failure NULL.
+/// Opens a store of version 2.0 or 1.0 from the `len` bytes at `bytes`, checking all of it
+/// once (docs/FORMAT.md section 8.1). The bytes are borrowed, not copied: keep them alive and
+/// unchanged until `vocc_store_free`. On success `*out` is the store; on failure NULL.
 ///
 /// # Safety
 /// `bytes` points to `len` readable bytes (or `len` is 0); `out` is NULL or writable; `err` is
@@ -451,6 +497,34 @@ pub unsafe extern "C" fn vocc_store_frame(store: *const VoccStore, out: *mut Voc
     guard(ptr::null_mut(), || {
         let s = get(store, "store")?;
         *get_mut(out, "out")? = VoccFrame::from(s.store.frame());
+        Ok(())
+    })
+}
+
+/// The store's version and scene section.
+///
+/// # Safety
+/// `store` is NULL or a live store; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vocc_store_info(store: *const VoccStore, out: *mut VoccStoreInfo) -> i32 {
+    guard(ptr::null_mut(), || {
+        let s = &get(store, "store")?.store;
+        let out = get_mut(out, "out")?;
+        let (major, minor) = s.version();
+        let crs = s.crs().as_bytes();
+        let mut info = VoccStoreInfo {
+            major,
+            minor,
+            objects: s.objects(),
+            scene: s.scene(),
+            crs_len: crs.len() as u32,
+            crs: [0; VOCC_CRS_LEN],
+        };
+        // At most 255 bytes (the format's limit), so the NUL always fits.
+        for (dst, &src) in info.crs.iter_mut().zip(crs) {
+            *dst = src as c_char;
+        }
+        *out = info;
         Ok(())
     })
 }
@@ -506,8 +580,8 @@ pub unsafe extern "C" fn vocc_frame_decode(
     })
 }
 
-/// Decodes and checks one cell's blob (docs/FORMAT.md section 6) against `frame`: `*id` is
-/// the cell's id, `*out` its record. Allocates nothing.
+/// Decodes and checks one cell's blob of version 2.0 or 1.0 (docs/FORMAT.md section 6) against
+/// `frame`: `*id` is the cell's id, `*out` its record. Allocates nothing.
 ///
 /// # Safety
 /// `frame` is NULL or readable; `bytes` points to `len` readable bytes (or `len` is 0); `id`,

@@ -6,7 +6,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::ffi::CStr;
 
-use vocc::runtime::format::{encode_blob, encode_store};
+use vocc::runtime::format::{encode_blob, encode_store, encode_store_with, SceneSection};
 
 use super::*;
 
@@ -72,14 +72,50 @@ fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
     }
 }
 
-/// Cell 12 (centre (250, 250)) has two long walls north and east of it; cell 3 is skipped.
+/// Cell 12 (centre (250, 250)) has two long walls north and east of it; cell 3 is skipped;
+/// cell 18 a far wall (exponents 2 and 3) of level 20.
 fn records() -> Vec<CellRecord> {
     let mut cells = vec![CellRecord::EMPTY; 25];
     // North: y = 250 + 60 from x = 150 to 350; east: x = 250 + 70 from y = 170 to 330.
     cells[12] = CellRecord::new(0, &[q(56, 376, 456, 376, 6), q(396, 96, 396, 416, 4)]).unwrap();
     cells[3] = CellRecord::Skipped;
     cells[7] = CellRecord::new(2, &[q(10, 400, 500, 400, 15)]).unwrap();
+    // Cell 18, centre (350, 350): from (350 - 300, 350 + 600) (steps of 4 m) to
+    // (350 + 300, 350 + 300) (steps of 2 m).
+    let far = QVo {
+        a: QPoint {
+            e: 3,
+            x: 256 - 75,
+            y: 256 + 150,
+        },
+        b: QPoint {
+            e: 2,
+            x: 256 + 150,
+            y: 256 + 150,
+        },
+        level: 20,
+    };
+    cells[18] = CellRecord::new(1, &[far]).unwrap();
     cells
+}
+
+/// The 1.0 store of docs/FORMAT.md section 12 (3 cells; cell 0 has two VOs on ground level 4,
+/// cell 1 is skipped).
+const STORE_V1: &str =
+    "89564f43430d0a1a010000000000000000000000f0b92941000000003cdd58410000000000000000\
+    0000000000000000000000000000000000000000000059400300000001000000000000000000e03f\
+    000000000000f83f00000000000000400000000000006440000000000000e03f0000000000001040\
+    000000000000f43f0b0000009ac7b08202ff000000000004c4f042c55b7861e1d53a";
+
+/// Cell 0 of that store as a 1.0 blob.
+const BLOB_V1: &str = "564f434201000000000204c4f042c55b7861e1d53a85913567";
+
+fn unhex(s: &str) -> Vec<u8> {
+    let s: String = s.split_whitespace().collect();
+    (0..s.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&s[i..i + 2], 16).unwrap())
+        .collect()
 }
 
 /// A deterministic scatter of boxes over the grid, some behind the walls, a few invalid.
@@ -419,6 +455,126 @@ fn blobs_and_frames_decode_like_the_store() {
 }
 
 #[test]
+fn a_1_0_store_and_blob_read_as_2_0_ones_and_the_store_info() {
+    // The 1.0 store of FORMAT.md: its frame, the records of its cells.
+    let v1 = unhex(STORE_V1);
+    let mut s: *mut VoccStore = ptr::null_mut();
+    let mut e = blank_error();
+    let f = Frame {
+        grid: GridDescriptor {
+            nx: 3,
+            ny: 1,
+            ..frame().grid
+        },
+        ..frame()
+    };
+    let mut info = VoccStoreInfo {
+        major: 0,
+        minor: 0,
+        objects: 9,
+        scene: 9,
+        crs_len: 9,
+        crs: [b'x' as c_char; VOCC_CRS_LEN],
+    };
+    unsafe {
+        assert_eq!(
+            vocc_store_open(v1.as_ptr(), v1.len(), &mut s, &mut e),
+            VOCC_OK
+        );
+        let mut fr = VoccFrame::from(&frame());
+        assert_eq!(vocc_store_frame(s, &mut fr), VOCC_OK);
+        assert_eq!(fr, VoccFrame::from(&f));
+        let mut c = VoccCell::default();
+        assert_eq!(vocc_store_cell(s, 0, &mut c, &mut e), VOCC_OK);
+        assert_eq!((c.skipped, c.ground, c.count), (0, 4, 2));
+        assert_eq!(
+            c.vos[0],
+            VoccVo {
+                x1: 196,
+                y1: 376,
+                x2: 336,
+                y2: 376,
+                exp1: 0,
+                exp2: 0,
+                level: 5
+            }
+        );
+        assert_eq!(vocc_store_info(s, &mut info), VOCC_OK);
+        assert_eq!(
+            (
+                info.major,
+                info.minor,
+                info.objects,
+                info.scene,
+                info.crs_len
+            ),
+            (1, 0, 0, 0, 0)
+        );
+        assert_eq!(info.crs[0], 0);
+        // The same cell from its 1.0 blob.
+        let blob = unhex(BLOB_V1);
+        let (mut id, mut b) = (9u32, VoccCell::default());
+        assert_eq!(
+            vocc_blob_decode(&fr, blob.as_ptr(), blob.len(), &mut id, &mut b, &mut e),
+            VOCC_OK
+        );
+        assert_eq!((id, b), (0, c));
+        vocc_store_free(s);
+        // A 2.0 store with a scene section.
+        let v2 = encode_store_with(
+            &frame(),
+            &records(),
+            &SceneSection {
+                objects: 3002,
+                scene: 0x0123_4567_89ab_cdef,
+                crs: "EPSG:2154",
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            vocc_store_open(v2.as_ptr(), v2.len(), &mut s, &mut e),
+            VOCC_OK
+        );
+        assert_eq!(vocc_store_info(s, &mut info), VOCC_OK);
+        assert_eq!(
+            (
+                info.major,
+                info.minor,
+                info.objects,
+                info.scene,
+                info.crs_len
+            ),
+            (2, 0, 3002, 0x0123_4567_89ab_cdef, 9)
+        );
+        assert_eq!(
+            CStr::from_ptr(info.crs.as_ptr()).to_str().unwrap(),
+            "EPSG:2154"
+        );
+        // Cell 18's far VO: exponents and a level above 15 come through.
+        assert_eq!(vocc_store_cell(s, 18, &mut c, &mut e), VOCC_OK);
+        assert_eq!(
+            c.vos[0],
+            VoccVo {
+                x1: 181,
+                y1: 406,
+                x2: 406,
+                y2: 406,
+                exp1: 3,
+                exp2: 2,
+                level: 20
+            }
+        );
+        let mut g = VoccVoGeom::default();
+        let fr = VoccFrame::from(&frame());
+        assert_eq!(vocc_vo_geometry(&fr, 18, &c, 0, &mut g), VOCC_OK);
+        assert_eq!((g.a, g.b), ([50.0, 950.0], [650.0, 650.0]));
+        assert_eq!(vocc_store_info(ptr::null(), &mut info), VOCC_ERR_NULL);
+        assert_eq!(vocc_store_info(s, ptr::null_mut()), VOCC_ERR_NULL);
+        vocc_store_free(s);
+    }
+}
+
+#[test]
 fn bad_stores_are_refused_with_the_rule_and_a_null_store() {
     let good = encode_store(&frame(), &records()).unwrap();
     let mut e = blank_error();
@@ -437,11 +593,11 @@ fn bad_stores_are_refused_with_the_rule_and_a_null_store() {
         (
             {
                 let mut b = good.clone();
-                b[8] = 2;
+                b[8] = 3;
                 b
             },
             VOCC_ERR_VERSION,
-            "unsupported major version 2 (this reader implements 1)",
+            "unsupported major version 3 (this reader implements 1 and 2)",
         ),
         (
             {
@@ -633,17 +789,42 @@ fn null_pointers_and_bad_arguments_give_statuses_not_crashes() {
                     }; 10],
                     ..cell
                 },
-                "cell: VO 0 has a field out of range (coordinates 0..512, level 0..16)",
+                "cell: VO 0 has a field out of range (exponents 0..8, coordinates 0..512, level 0..32)",
             ),
             (
                 VoccCell {
                     vos: [VoccVo {
-                        level: 16,
+                        level: 32,
                         ..cell.vos[0]
                     }; 10],
                     ..cell
                 },
-                "cell: VO 0 has a field out of range (coordinates 0..512, level 0..16)",
+                "cell: VO 0 has a field out of range (exponents 0..8, coordinates 0..512, level 0..32)",
+            ),
+            (
+                VoccCell {
+                    vos: [VoccVo {
+                        exp2: 8,
+                        ..cell.vos[0]
+                    }; 10],
+                    ..cell
+                },
+                "cell: VO 0 has a field out of range (exponents 0..8, coordinates 0..512, level 0..32)",
+            ),
+            (
+                // (x1, y1) = (56, 376) at exponent 1: 376 - 256 = 120 and 56 - 256 = -200;
+                // at (200, 300), both inside -128..128, exponent 0 holds it.
+                {
+                    let mut c = cell;
+                    c.vos[1] = VoccVo {
+                        x1: 200,
+                        y1: 300,
+                        exp1: 1,
+                        ..c.vos[1]
+                    };
+                    c
+                },
+                "cell: VO 1 has an endpoint that is not canonical (a smaller exponent holds it)",
             ),
             (
                 {
@@ -654,6 +835,7 @@ fn null_pointers_and_bad_arguments_give_statuses_not_crashes() {
                         x2: 3,
                         y2: 4,
                         level: 1,
+                        ..VoccVo::default()
                     };
                     c
                 },

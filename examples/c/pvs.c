@@ -156,8 +156,20 @@ int main(int argc, char **argv) {
         for (size_t i = 0; i < count; i++) printf(i ? ",%u" : "%u", ids[i]);
         printf("]}\n");
     } else {
+        /* What the store says about itself (a 1.0 store records no scene), and the cell's VOs
+           as stored: endpoint grid indices with their exponents, and the height level. */
+        VoccStoreInfo info;
+        vocc_store_info(store, &info);
+        printf("store %u.%u, baked for %u objects, scene %016llx, CRS \"%s\"\n", info.major,
+               info.minor, info.objects, (unsigned long long)info.scene, info.crs);
         printf("cell %u: %zu of %zu objects potentially visible, %u VOs%s\n", id, count,
                objects, cell.count, cell.skipped ? " (skipped: inside a building)" : "");
+        for (unsigned k = 0; k < cell.count; k++) {
+            const VoccVo *v = &cell.vos[k];
+            printf("  VO %u: (e %u, x %u, y %u) - (e %u, x %u, y %u), level %u\n", k,
+                   (unsigned)v->exp1, (unsigned)v->x1, (unsigned)v->y1, (unsigned)v->exp2,
+                   (unsigned)v->x2, (unsigned)v->y2, (unsigned)v->level);
+        }
     }
     rc = 0;
 done:

@@ -52,7 +52,27 @@ if [ "$culled" -eq 0 ]; then
   echo "C example: none of the $compared cells culled anything; the comparison proves nothing" >&2
   exit 1
 fi
-"$out/pvs" "$out/lyon.vocc" "$out/lyon.boxes" --at 1842000,5176050
+"$out/pvs" "$out/lyon.vocc" "$out/lyon.boxes" --at 1842000,5176050 | tee "$out/text.txt"
+grep -q "^store 2\.0, baked for 2576 objects" "$out/text.txt" || {
+  echo "C example: the store's version and scene are not 2.0 and 2576 objects" >&2
+  exit 1
+}
+
+# The C API reads 1.0 stores: the 1.0 example of docs/FORMAT.md, cell 0 (two VOs of exponents 0).
+python3 - "$out/doc-1.0.vocc" <<'PY'
+import re, sys
+doc = open("docs/FORMAT.md").read()
+block = re.search(r"```hex example:store-1\.0\n(.*?)```", doc, re.S).group(1)
+data = b"".join(bytes.fromhex(l.split("#")[0].split(":", 1)[1].replace(" ", "")) for l in block.splitlines())
+open(sys.argv[1], "wb").write(data)
+PY
+"$out/pvs" "$out/doc-1.0.vocc" "$out/lyon.boxes" --cell 0 >"$out/v1.txt"
+grep -q "^store 1\.0, baked for 0 objects, scene 0000000000000000, CRS \"\"" "$out/v1.txt" &&
+  grep -q "2 VOs" "$out/v1.txt" &&
+  grep -q "VO 0: (e 0, x 196, y 376) - (e 0, x 336, y 376), level 5" "$out/v1.txt" || {
+  echo "C example: the 1.0 example store reads otherwise: $(cat "$out/v1.txt")" >&2
+  exit 1
+}
 
 # A damaged store is refused with the library's message, and the example exits 1.
 head -c 500 "$out/lyon.vocc" >"$out/damaged.vocc"
@@ -64,4 +84,4 @@ grep -q "truncated: .* bytes needed, 500 given" "$out/err.txt" || {
   echo "C example: unexpected message for a truncated store: $(cat "$out/err.txt")" >&2
   exit 1
 }
-echo "C example: $compared passed, 0 failed ($culled of them cull objects; static and shared library)"
+echo "C example: $compared passed, 0 failed ($culled of them cull objects; static and shared library); a 1.0 store read"

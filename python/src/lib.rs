@@ -274,13 +274,25 @@ impl RawStore {
         self.store.cell_count()
     }
 
+    /// `(major, minor)`: 2.0, or 1.x for a store written before 2.0 (read all the same).
+    fn version(&self) -> (u16, u16) {
+        self.store.version()
+    }
+
+    /// The scene section `(objects, scene fingerprint, CRS name)`: `(0, 0, "")` when not
+    /// recorded (every 1.0 store).
+    fn scene(&self) -> (u32, u64, String) {
+        let s = self.store.scene_section();
+        (s.objects, s.scene, s.crs.to_string())
+    }
+
     /// The cell holding local position (x, y), or None.
     fn cell_at(&self, x: f64, y: f64) -> Option<u32> {
         self.store.cell_at(x, y)
     }
 
     /// `(skipped, ground level, VO geometry bytes, VO grid bytes)`: per VO 6 f64 (local ax, ay,
-    /// bx, by, bottom, top) and 5 u16 (x1, y1, x2, y2, level).
+    /// bx, by, bottom, top) and 7 u16 (x1, y1, x2, y2, level, exponent of a, exponent of b).
     fn cell<'py>(
         &self,
         py: Python<'py>,
@@ -295,7 +307,15 @@ impl RawStore {
                 .dequantize(id, rec.ground(), q)
                 .ok_or_else(|| VoccError::new_err(format!("cell {id} is outside the grid")))?;
             geom.extend([g.a[0], g.a[1], g.b[0], g.b[1], g.g, g.h]);
-            for v in [q.a.x, q.a.y, q.b.x, q.b.y, q.level as u16] {
+            for v in [
+                q.a.x,
+                q.a.y,
+                q.b.x,
+                q.b.y,
+                q.level as u16,
+                q.a.e as u16,
+                q.b.e as u16,
+            ] {
                 grid.extend(v.to_le_bytes());
             }
         }

@@ -122,7 +122,47 @@ def test_vos_and_cell_at_equal_the_cli(baked):
         assert v.bottom.tolist() == [w["bottom"] for w in want["vos"]]
         assert v.top.tolist() == [w["top"] for w in want["vos"]]
         assert v.level.tolist() == [w["level"] for w in want["vos"]]
+        assert v.grid.tolist() == [
+            [w["fields"]["a"]["x"], w["fields"]["a"]["y"], w["fields"]["b"]["x"], w["fields"]["b"]["y"]]
+            for w in want["vos"]
+        ]
+        assert v.exponents.tolist() == [[w["fields"]["a"]["e"], w["fields"]["b"]["e"]] for w in want["vos"]]
         assert store.is_skipped(c) == want["skipped"]
+
+
+def test_the_store_records_its_version_and_scene(baked):
+    store, _, cli_store = baked
+    want = json.loads(cli("inspect", str(cli_store), "--json"))
+    assert want["version"] == "2.0"
+    assert store.version == (2, 0)
+    assert store.objects == want["objects"] == 2576
+    assert store.scene == int(want["scene"], 16) != 0
+    assert store.crs == want["crs"] == ""
+
+
+def doc_hex(name):
+    """The bytes of a ```hex example:NAME block of docs/FORMAT.md."""
+    text = (ROOT / "docs" / "FORMAT.md").read_text()
+    block = text.split("```hex example:" + name + "\n", 1)[1].split("```", 1)[0]
+    return bytes.fromhex("".join(line.split("#")[0].split(":", 1)[1] for line in block.splitlines()))
+
+
+def test_1_0_and_2_0_stores_read_alike():
+    # FORMAT.md's 2.0 example (a far VO with exponents 3, a level of 20, a CRS name) and its 1.0
+    # example (5-byte VOs, no scene section): cell 0's first VO is the same wall in both.
+    new = vocc.Store.from_bytes(doc_hex("store"))
+    old = vocc.Store.from_bytes(doc_hex("store-1.0"))
+    assert (new.version, new.objects, new.scene, new.crs) == ((2, 0), 2576, 0x9E3779B97F4A7C15, "EPSG:2154")
+    assert (old.version, old.objects, old.scene, old.crs) == ((1, 0), 0, 0, "")
+    assert old.frame == new.frame
+    v, w = new.vos(0), old.vos(0)
+    assert v.a[0].tolist() == w.a[0].tolist() == [843020.0, 6518110.0]
+    assert v.level.tolist() == [5, 20, 16] and w.level.tolist() == [5, 3]
+    assert v.exponents.tolist() == [[0, 0], [3, 3], [0, 2]]
+    assert w.exponents.tolist() == [[0, 0], [0, 0]]
+    assert v.grid[1].tolist() == [194, 406, 344, 406]
+    assert v.a[1].tolist() == [843000.0 - 198.0, 6518000.0 + 650.0]
+    assert old.is_skipped(1) and new.is_skipped(1)
 
 
 def test_errors_carry_the_library_message(tmp_path, baked):

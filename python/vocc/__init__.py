@@ -21,7 +21,7 @@ errors raise ``OSError``. The bake and scene loading release the GIL. Docs: docs
 from __future__ import annotations
 
 import os
-from typing import Callable, NamedTuple, Optional, Sequence, Union
+from typing import Callable, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -66,7 +66,10 @@ def scene_boxes(
 class VOs(NamedTuple):
     """A cell's virtual occluders, world coordinates, most effective first: VO k is the
     vertical quad over the segment ``a[k]``-``b[k]`` from height ``bottom[k]`` to ``top[k]``.
-    ``level`` is its stored height level, ``grid`` its stored endpoint indices (x1, y1, x2, y2)."""
+    ``level`` is its stored height level (0..32; 0..16 in a 1.0 store), ``grid`` its stored
+    endpoint indices (x1, y1, x2, y2; n x 4) and ``exponents`` their exponents (e1, e2; n x 2,
+    0..8; 0 in a 1.0 store): endpoint 1 is ``centre + (x1 - 256, y1 - 256) * quantum * 2**e1``
+    of its cell (docs/FORMAT.md section 3)."""
 
     a: np.ndarray
     b: np.ndarray
@@ -74,6 +77,7 @@ class VOs(NamedTuple):
     top: np.ndarray
     level: np.ndarray
     grid: np.ndarray
+    exponents: np.ndarray
 
 
 class BoxTree:
@@ -90,7 +94,8 @@ class BoxTree:
 
 
 class Store:
-    """An occluder store (docs/FORMAT.md), checked whole when opened."""
+    """An occluder store (docs/FORMAT.md), checked whole when opened: version 2.0, or a 1.0
+    store written before it (read the same way; it records no scene)."""
 
     def __init__(self, raw: "_vocc.RawStore"):
         self._raw = raw
@@ -128,6 +133,27 @@ class Store:
     def cell_count(self) -> int:
         return self._raw.cell_count()
 
+    @property
+    def version(self) -> Tuple[int, int]:
+        """``(major, minor)`` of the store file: ``(2, 0)``, or ``(1, minor)`` for a 1.0 store."""
+        return self._raw.version()
+
+    @property
+    def objects(self) -> int:
+        """How many objects the store was baked for (its scene section); 0: not recorded."""
+        return self._raw.scene()[0]
+
+    @property
+    def scene(self) -> int:
+        """The fingerprint of the scene the store was baked from (opaque; docs/FORMAT.md
+        section 5.2); 0: not recorded."""
+        return self._raw.scene()[1]
+
+    @property
+    def crs(self) -> str:
+        """The name of the scene's coordinate reference system; empty: unknown."""
+        return self._raw.scene()[2]
+
     def cell_at(self, x: float, y: float, *, local: bool = False) -> Optional[int]:
         """The id of the cell holding world position (x, y) (local with ``local=True``), or None
         outside the grid."""
@@ -148,7 +174,7 @@ class Store:
         """The cell's VOs as numpy arrays, world coordinates."""
         _, _, geom, grid = self._raw.cell(cell)
         g = np.frombuffer(geom, dtype="<f8").reshape(-1, 6)
-        q = np.frombuffer(grid, dtype="<u2").reshape(-1, 5)
+        q = np.frombuffer(grid, dtype="<u2").reshape(-1, 7)
         ox, oy, oz = self._frame["origin"]
         o2 = np.array([ox, oy])
         return VOs(
@@ -158,6 +184,7 @@ class Store:
             top=g[:, 5] + oz,
             level=q[:, 4].astype(np.uint8),
             grid=q[:, 0:4].copy(),
+            exponents=q[:, 5:7].astype(np.uint8),
         )
 
     def tree(self, boxes) -> BoxTree:

@@ -26,7 +26,9 @@ use super::incremental::{CellHashes, HashesError};
 use super::params::BakeParams;
 use super::plan::{bake_cells, records, BakeError, CellBake, Plan};
 use crate::runtime::crc::crc32;
-use crate::runtime::format::{encode_frame, encode_store, CellRecord, FormatError, Store};
+use crate::runtime::format::{
+    encode_frame, encode_store_with, CellRecord, FormatError, SceneSection, Store,
+};
 use crate::runtime::grid::CellId;
 use crate::scene::Scene;
 
@@ -297,6 +299,19 @@ impl<'s> BakeJob<'s> {
         &self.plan
     }
 
+    /// The scene section the store records (`docs/FORMAT.md` 5.2): the objects baked for and
+    /// the scene's fingerprint. The CRS name is left empty until `Scene` carries one: it plugs
+    /// in here, as `crs: &scene.crs` (a name over 255 bytes would be refused by the encoder).
+    pub fn scene_section(&self) -> SceneSection<'static> {
+        let scene = self.plan.scene;
+        SceneSection {
+            // Object indices are `u32`, so the count fits (saturated, never reached).
+            objects: u32::try_from(scene.objects.len()).unwrap_or(u32::MAX),
+            scene: scene.fingerprint(),
+            crs: "",
+        }
+    }
+
     /// The world rectangle of the grid.
     fn grid_world(&self) -> [f64; 4] {
         let g = &self.plan.frame.grid;
@@ -416,7 +431,8 @@ impl<'s> BakeJob<'s> {
         for (id, rec) in reused {
             recs[id as usize] = rec;
         }
-        let store = encode_store(&plan.frame, &recs).map_err(JobError::Encode)?;
+        let store = encode_store_with(&plan.frame, &recs, &self.scene_section())
+            .map_err(JobError::Encode)?;
         let hashes = CellHashes {
             store_crc: crc32(&store),
             shard: self.shard,
@@ -526,7 +542,14 @@ mod tests {
         assert!(0 < sum.cells_selected && (sum.cells_selected as u64) < sum.grid.cells);
         assert_eq!(sum.store_bytes, full.store.len());
         assert_eq!(sum.scene.objects, 300);
-        Store::parse(&full.store).unwrap();
+        // The store records the scene it was baked from (FORMAT.md 5.2); no CRS yet.
+        let st = Store::parse(&full.store).unwrap();
+        assert_eq!(st.major(), 2);
+        assert_eq!(
+            (st.objects(), st.scene(), st.crs()),
+            (300, s.fingerprint(), "")
+        );
+        assert_ne!(st.scene(), city(301).fingerprint());
         CellHashes::decode(&full.hashes).unwrap();
         // Two threads: the same bytes; progress counts every cell once, from 0.
         let seen = std::sync::Mutex::new(Vec::new());

@@ -51,7 +51,7 @@ struct Cli {
 enum Command {
     /// Bake a scene into an occluder store: at most 10 virtual occluders per view cell.
     Bake(bake::BakeArgs),
-    /// Describe a store: grid, frame, VOs per cell, bytes; one cell's VOs; or every cell.
+    /// Describe a store (2.0 or 1.0), one cell's VOs with their stored fields, or every cell.
     Inspect(store::InspectArgs),
     /// Build the potentially visible set of one cell from a store and the scene's objects.
     Pvs {
@@ -87,7 +87,8 @@ enum Command {
         /// Write the VO quads as an OBJ file.
         #[arg(long, value_name = "FILE", conflicts_with = "blob")]
         obj: Option<PathBuf>,
-        /// Write the cell's self-contained blob (and FILE.frame, the frame it decodes with).
+        /// Write the cell's self-contained blob, format 2.0 (and FILE.frame, the frame it
+        /// decodes with).
         #[arg(long, value_name = "FILE")]
         blob: Option<PathBuf>,
     },
@@ -142,6 +143,8 @@ enum Command {
         output: PathBuf,
     },
     /// Join the shards of one bake (`bake --shard I/N`) into the store a single bake writes.
+    ///
+    /// Shards recording another frame, scene or set of options are refused.
     Merge {
         /// Shard store files.
         #[arg(required = true)]

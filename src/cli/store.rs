@@ -16,7 +16,8 @@ use serde_json::json;
 use vocc::bake::incremental::{hashes_path, CellHashes};
 use vocc::runtime::crc::crc32;
 use vocc::runtime::culler::{pvs_with_stats, BoxTree};
-use vocc::runtime::format::{encode_blob, encode_frame, CellRecord, Store};
+use vocc::runtime::format::{encode_blob, encode_frame, encode_store_with, CellRecord, Store};
+use vocc::runtime::frame::{QPoint, QVo, HEIGHT_LEVELS, HEIGHT_LEVELS_V1};
 use vocc::runtime::{CellId, Frame};
 use vocc::scene;
 
@@ -32,27 +33,43 @@ fn cell_record(store: &Store, id: CellId) -> Result<CellRecord> {
     Ok(store.cell(id)?)
 }
 
-/// The VOs of a cell in world coordinates, as JSON.
-fn vos_json(f: &Frame, id: CellId, rec: &CellRecord) -> Vec<serde_json::Value> {
+/// A VO's bytes as the store of major `major` holds them, in hex.
+fn vo_hex(q: &QVo, major: u16) -> String {
+    let bytes = if major == 1 {
+        q.to_bytes_v1().to_vec()
+    } else {
+        q.to_bytes().to_vec()
+    };
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A stored endpoint's fields, as JSON.
+fn point_json(p: &QPoint) -> serde_json::Value {
+    json!({"e": p.e, "x": p.x, "y": p.y})
+}
+
+/// The VOs of a cell in world coordinates, as JSON, with their stored fields and bytes (as the
+/// store of major `major` holds them).
+fn vos_json(f: &Frame, id: CellId, rec: &CellRecord, major: u16) -> Vec<serde_json::Value> {
     let o = f.origin;
     rec.vos()
         .iter()
         .filter_map(|q| {
             let g = f.dequantize(id, rec.ground(), q)?;
-            let hex: String = q.to_bytes_v1().iter().map(|b| format!("{b:02x}")).collect();
             Some(json!({
                 "a": [g.a[0] + o[0], g.a[1] + o[1]],
                 "b": [g.b[0] + o[0], g.b[1] + o[1]],
                 "bottom": g.g + o[2],
                 "top": g.h + o[2],
                 "level": q.level,
-                "bytes": hex,
+                "fields": {"a": point_json(&q.a), "b": point_json(&q.b), "level": q.level},
+                "bytes": vo_hex(q, major),
             }))
         })
         .collect()
 }
 
-fn cell_json(f: &Frame, id: CellId, rec: &CellRecord) -> serde_json::Value {
+fn cell_json(f: &Frame, id: CellId, rec: &CellRecord, major: u16) -> serde_json::Value {
     let o = f.origin;
     let r = f.grid.cell_rect(id).unwrap_or([0.0; 4]);
     let view = f.cell_view(id, rec.ground());
@@ -62,7 +79,7 @@ fn cell_json(f: &Frame, id: CellId, rec: &CellRecord) -> serde_json::Value {
         "skipped": matches!(rec, CellRecord::Skipped),
         "ground": f.ground_z(rec.ground()) + o[2],
         "eyes": view.map(|v| [v.e0 + o[2], v.e1 + o[2]]),
-        "vos": vos_json(f, id, rec),
+        "vos": vos_json(f, id, rec, major),
     })
 }
 
@@ -108,16 +125,6 @@ pub struct InspectArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Store bytes of a cell: its index byte and its payload record (`docs/FORMAT.md` 5.2, 5.4).
-fn cell_bytes(f: &Frame, rec: &CellRecord) -> usize {
-    let n = rec.vos().len();
-    1 + if n == 0 {
-        0
-    } else {
-        5 * n + usize::from(f.per_cell_ground())
-    }
 }
 
 /// The scene's object boxes in the store's local frame, refused when none of them meets the
@@ -204,7 +211,7 @@ fn list_cells(a: &InspectArgs, store: &Store) -> Result<()> {
         rows.push(Row {
             id,
             rec,
-            bytes: cell_bytes(&f, &rec),
+            bytes: store.cell_bytes(id) as usize,
             culled,
         });
     }
@@ -292,7 +299,7 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     if let Some(id) = a.cell {
         let rec = cell_record(&store, id)?;
         if a.json {
-            serde_json::to_writer_pretty(&mut out, &cell_json(&f, id, &rec))?;
+            serde_json::to_writer_pretty(&mut out, &cell_json(&f, id, &rec, store.major()))?;
             writeln!(out)?;
             return Ok(());
         }
@@ -311,7 +318,7 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
                     "ground {:.2} m, {} VOs, {} bytes",
                     f.ground_z(rec.ground()) + o[2],
                     rec.vos().len(),
-                    cell_bytes(&f, &rec)
+                    store.cell_bytes(id)
                 ),
             }
         )?;
@@ -322,10 +329,9 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
             let Some(g) = f.dequantize(id, rec.ground(), q) else {
                 continue;
             };
-            let hex: String = q.to_bytes_v1().iter().map(|b| format!("{b:02x}")).collect();
             writeln!(
                 out,
-                "  VO {k}: ({:.3}, {:.3}) - ({:.3}, {:.3}), {:.1} m long, {:.2}..{:.2} m, level {}, bytes {hex}",
+                "  VO {k}: ({:.3}, {:.3}) - ({:.3}, {:.3}), {:.1} m long, {:.2}..{:.2} m, level {}; a (e {}, x {}, y {}), b (e {}, x {}, y {}), bytes {}",
                 g.a[0] + o[0],
                 g.a[1] + o[1],
                 g.b[0] + o[0],
@@ -333,7 +339,14 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
                 (g.b[0] - g.a[0]).hypot(g.b[1] - g.a[1]),
                 g.g + o[2],
                 g.h + o[2],
-                q.level
+                q.level,
+                q.a.e,
+                q.a.x,
+                q.a.y,
+                q.b.e,
+                q.b.x,
+                q.b.y,
+                vo_hex(q, store.major())
             )?;
         }
         return Ok(());
@@ -354,9 +367,17 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     }
     let most = (0..=10).rev().find(|&k| hist[k] > 0).unwrap_or(0);
     let (major, minor) = store.version();
+    let levels = if major == 1 {
+        HEIGHT_LEVELS_V1
+    } else {
+        HEIGHT_LEVELS
+    };
     let v = json!({
         "file": path.display().to_string(),
         "version": format!("{major}.{minor}"),
+        "objects": store.objects(),
+        "scene": format!("{:016x}", store.scene()),
+        "crs": store.crs(),
         "bytes": bytes.len(),
         "cells": n,
         "bytes_per_cell": bytes.len() as f64 / n.max(1) as f64,
@@ -370,7 +391,7 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
         "quantum_m": f.quantum,
         "eye": [f.eye_lo, f.eye_hi],
         "ground": {"z0": f.ground_z0, "step": f.ground_step},
-        "vo_top_levels_above_eye_m": (0..16).map(|k| f.vo_top(0.0, k)).collect::<Vec<f64>>(),
+        "vo_top_levels_above_eye_m": (0..levels).map(|k| f.vo_top(0.0, k)).collect::<Vec<f64>>(),
     });
     if as_json {
         serde_json::to_writer_pretty(&mut out, &v)?;
@@ -383,6 +404,22 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
         path.display(),
         bytes.len(),
         bytes.len() as f64 / n.max(1) as f64
+    )?;
+    writeln!(
+        out,
+        "scene: {}; fingerprint {}; CRS {}",
+        match store.objects() {
+            0 => "object count not recorded".to_string(),
+            k => format!("baked for {k} objects"),
+        },
+        match store.scene() {
+            0 => "not recorded".to_string(),
+            h => format!("{h:016x}"),
+        },
+        match store.crs() {
+            "" => "unknown".to_string(),
+            c => format!("{c:?}"),
+        }
     )?;
     writeln!(
         out,
@@ -516,7 +553,7 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
     match to {
         ExportTo::Json => {
             let mut out = std::io::stdout().lock();
-            serde_json::to_writer_pretty(&mut out, &cell_json(&f, id, &rec))?;
+            serde_json::to_writer_pretty(&mut out, &cell_json(&f, id, &rec, store.major()))?;
             writeln!(out)?;
         }
         ExportTo::Obj(file) => {
@@ -564,7 +601,8 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
 /// `vocc merge SHARD... -o STORE`: the shards of one bake (`vocc bake --shard I/N`) joined into
 /// the store a single bake writes. Every shard must carry its own `.hashes` file (which records
 /// its index and count), every index `0..N` must be given exactly once, and every shard must have
-/// the same frame and options; each cell's record is the one shard's that baked it (cells no
+/// the same frame, scene section and options; the merged store (2.0) carries that scene section
+/// (a 1.0 shard has an empty one); each cell's record is the one shard's that baked it (cells no
 /// shard baked, and cells with no VOs, stay empty); two shards disagreeing on a cell is an error.
 pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
     anyhow::ensure!(!shards.is_empty(), "give the shard files to merge");
@@ -590,6 +628,18 @@ pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
             "{} has another frame (grid, origin, eyes or quantization) than {}: shards must come from one bake",
             p.display(),
             shards[0].display()
+        );
+        anyhow::ensure!(
+            s.scene_section() == stores[0].scene_section(),
+            "{} records another scene than {} (objects {} and {}, fingerprint {:016x} and {:016x}, CRS {:?} and {:?}): shards must come from one bake",
+            p.display(),
+            shards[0].display(),
+            s.objects(),
+            stores[0].objects(),
+            s.scene(),
+            stores[0].scene(),
+            s.crs(),
+            stores[0].crs()
         );
     }
     // Each shard's hashes: which shard it is, and the content hashes the merge carries on.
@@ -690,7 +740,7 @@ pub fn merge(shards: Vec<PathBuf>, output: &Path) -> Result<()> {
         }
         records.push(rec);
     }
-    let out = vocc::runtime::format::encode_store(&frame, &records)?;
+    let out = encode_store_with(&frame, &records, &stores[0].scene_section())?;
     // The shards' hashes, merged, so the merged store can serve `bake --reuse` (stale hashes are
     // removed before the store is written; see `bake`).
     match std::fs::remove_file(&hashes_out) {

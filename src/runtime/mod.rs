@@ -8,7 +8,8 @@
 //! object boxes with a panic (object indices are `u32`).
 //!
 //! Modules: [`grid`] (cell ids), [`frame`] (what the bytes mean as geometry), [`format`] (the
-//! store file, cell blobs and the frame's bytes, specified in `docs/FORMAT.md`), [`crc`],
+//! store file, cell blobs and the frame's bytes, specified in `docs/FORMAT.md`: 2.0 written,
+//! 1.0 still read), [`crc`],
 //! [`occlusion`] (rule 3) and [`culler`] (the PVS).
 //!
 //! ## Use
@@ -56,8 +57,8 @@ pub mod occlusion;
 
 pub use culler::{pvs, BoxTree};
 pub use format::{
-    decode_blob, decode_frame, encode_blob, encode_frame, encode_store, validate_frame, CellRecord,
-    FormatError, Store, VoList,
+    decode_blob, decode_frame, encode_blob, encode_frame, encode_store, encode_store_with,
+    validate_frame, CellRecord, FormatError, SceneSection, Store, VoList,
 };
 pub use frame::{CellView, Frame, QPoint, QVo, VoGeom, MAX_VOS_PER_CELL};
 pub use grid::{CellId, GridDescriptor};

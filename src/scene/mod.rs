@@ -17,6 +17,7 @@ pub mod attr;
 pub mod cityjson;
 pub mod decompose;
 pub mod error;
+pub mod fingerprint;
 pub mod footprint;
 pub mod gencity;
 pub mod geojson;

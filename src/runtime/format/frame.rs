@@ -3,14 +3,23 @@
 //! Input: a [`Frame`], or exactly 112 untrusted bytes. Output: the bytes, or the checked frame.
 //! Invariants: the rules are checked in the document's order and the first broken one is
 //! named (`BadFrame`); [`encode_frame`] writes any frame as it is, and the decoders and store
-//! encoders call [`validate_frame`].
+//! encoders call [`validate_frame`]. Rule F12 (the highest VO top is finite) takes the highest
+//! level of a major: 31 for 2.0, 15 for the frame inside a 1.0 store. A frame on its own (the
+//! 112 bytes of [`decode_frame`], the frame given beside a blob, the encoders' frame) follows
+//! the 2.0 rule, which every frame it accepts passes at level 15 too.
 
-use super::{FormatError, Reader, FRAME_LEN, MAX_CELLS};
-use crate::runtime::frame::{Frame, HEIGHT_LEVELS_V1};
+use super::{FormatError, Reader, Version, FRAME_LEN, MAX_CELLS};
+use crate::runtime::frame::Frame;
 use crate::runtime::grid::GridDescriptor;
 
-/// Checks the frame rules F1..F12 of FORMAT.md section 4.1, in order.
+/// Checks the frame rules F1..F12 of FORMAT.md section 4.1, in order, as version 2.0 states
+/// them (F12 at level 31): the rule of a frame on its own and of every frame an encoder writes.
 pub fn validate_frame(f: &Frame) -> Result<(), FormatError> {
+    validate_frame_of(f, Version::V2)
+}
+
+/// The frame rules with F12 at the highest level of `version` (a 1.0 store: 15).
+pub(crate) fn validate_frame_of(f: &Frame, version: Version) -> Result<(), FormatError> {
     let g = &f.grid;
     let floats = [
         f.origin[0],
@@ -56,7 +65,7 @@ pub fn validate_frame(f: &Frame) -> Result<(), FormatError> {
         far_x.is_finite() && far_y.is_finite(),
         "F11: the grid's far corner must be finite",
     )?;
-    let top = f.vo_top(f.ground_z(u8::MAX) + f.eye_hi, HEIGHT_LEVELS_V1 - 1);
+    let top = f.vo_top(f.ground_z(u8::MAX) + f.eye_hi, version.top_level());
     rule(top.is_finite(), "F12: the highest VO top must be finite")?;
     Ok(())
 }

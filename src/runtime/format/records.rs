@@ -1,16 +1,18 @@
-//! Cell records, the unit the store's payload and the blob share (FORMAT.md sections 5.2 and
-//! 5.4): one cell's ground level and at most 10 VOs, or "skipped".
+//! Cell records, the unit the store's payload and the blob share (FORMAT.md sections 5.3 and
+//! 5.5): one cell's ground level and at most 10 VOs, or "skipped".
 //!
-//! Input: a record's bytes and its index value (decoding), or a [`CellRecord`] (encoding).
-//! Output: the record, its size, its bytes.
-//! Invariants: a record is a fixed-size value ([`VoList`] holds its VOs inline, no heap);
-//! `record_size` is the one place that says how many payload bytes a count takes; decoding
-//! rejects a degenerate VO, encoding also a field out of range or an unstored ground level.
+//! Input: a record's bytes, its index value and the major of its store or blob (decoding), or a
+//! [`CellRecord`] (encoding, 2.0). Output: the record, its size, its bytes.
+//! Invariants: a record is a fixed-size value ([`VoList`] holds its VOs inline, no heap), the
+//! same whatever the major of its bytes (a 1.0 VO has exponents 0); `record_size` is the one
+//! place that says how many payload bytes a count takes; decoding rejects, VO by VO, a reserved
+//! bit set (2.0), a non-canonical endpoint (2.0) and a degenerate VO, in that order; encoding
+//! also a field out of range or an unstored ground level.
 
 use std::fmt;
 use std::ops::Deref;
 
-use super::{FormatError, Reader, SKIPPED, VO_BYTES};
+use super::{FormatError, Reader, Version, SKIPPED, VO_BYTES, VO_BYTES_V1};
 use crate::runtime::frame::{QPoint, QVo, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
 
@@ -150,26 +152,27 @@ pub(super) fn count_of(value: u8) -> Option<u8> {
     }
 }
 
-/// Payload bytes of a cell with `n` VOs.
-pub(super) fn record_size(n: u8, ground_byte: bool) -> u64 {
+/// Payload bytes of a cell with `n` VOs in a store or blob of `version`.
+pub(super) fn record_size(n: u8, ground_byte: bool, version: Version) -> u64 {
     if n == 0 {
         0
     } else {
-        n as u64 * VO_BYTES as u64 + ground_byte as u64
+        n as u64 * version.vo_bytes() as u64 + ground_byte as u64
     }
 }
 
-/// Decodes one record of `n >= 1` VOs from exactly its bytes; `offset` is where `bytes` starts
-/// in the file or blob (for errors).
+/// Decodes one record of `n >= 1` VOs of `version` from exactly its bytes; `offset` is where
+/// `bytes` starts in the file or blob (for errors).
 pub(super) fn read_record(
     cell: CellId,
     n: u8,
     ground_byte: bool,
+    version: Version,
     bytes: &[u8],
     offset: u64,
 ) -> Result<CellRecord, FormatError> {
     let short = || FormatError::Truncated {
-        needed: offset + record_size(n, ground_byte),
+        needed: offset + record_size(n, ground_byte, version),
         got: offset + bytes.len() as u64,
     };
     let mut r = Reader::new(bytes);
@@ -180,21 +183,47 @@ pub(super) fn read_record(
     };
     let mut vos = VoList::new();
     for k in 0..n {
-        let q = QVo::from_bytes_v1(r.take::<VO_BYTES>().ok_or_else(short)?);
-        if q.is_degenerate() {
-            return Err(FormatError::DegenerateVo {
-                cell,
-                vo: k,
-                offset: offset + ground_byte as u64 + k as u64 * VO_BYTES as u64,
-            });
-        }
+        let at = offset + ground_byte as u64 + k as u64 * version.vo_bytes() as u64;
+        let q = match version {
+            Version::V1 => QVo::from_bytes_v1(r.take::<VO_BYTES_V1>().ok_or_else(short)?),
+            Version::V2 => {
+                let b = r.take::<VO_BYTES>().ok_or_else(short)?;
+                if QVo::reserved_bit(b) {
+                    return Err(FormatError::ReservedVoBit {
+                        cell,
+                        vo: k,
+                        offset: at,
+                    });
+                }
+                QVo::from_bytes(b)
+            }
+        };
+        check_vo(cell, k, &q, at)?;
         vos.push(q)?;
     }
     Ok(CellRecord::Vos { ground, vos })
 }
 
-/// Checks one record for encoding and returns its payload size. `offset` is where the record
-/// will start (for errors).
+/// The checks both a decoder and the encoder make of a VO whose fields are in range: its
+/// endpoints canonical (S19/B12; always so in 1.0, whose exponents are 0), then not degenerate
+/// (S13/B9). `offset` is where its bytes start.
+fn check_vo(cell: CellId, vo: u8, q: &QVo, offset: u64) -> Result<(), FormatError> {
+    if !q.is_canonical() {
+        return Err(FormatError::NonCanonicalVo {
+            cell,
+            vo,
+            offset,
+            endpoint: if q.a.is_canonical() { 'b' } else { 'a' },
+        });
+    }
+    if q.is_degenerate() {
+        return Err(FormatError::DegenerateVo { cell, vo, offset });
+    }
+    Ok(())
+}
+
+/// Checks one record for encoding (2.0) and returns its payload size. `offset` is where the
+/// record will start (for errors).
 pub(super) fn check_record(
     cell: CellId,
     rec: &CellRecord,
@@ -212,20 +241,20 @@ pub(super) fn check_record(
     }
     for (k, q) in vos.iter().enumerate() {
         let k8 = k as u8;
-        if !q.fits_v1() || !q.in_range() {
+        if !q.in_range() {
             return Err(FormatError::VoOutOfRange { cell, vo: k8 });
         }
-        if q.is_degenerate() {
-            return Err(FormatError::DegenerateVo {
-                cell,
-                vo: k8,
-                offset: offset + ground_byte as u64 + (k * VO_BYTES) as u64,
-            });
-        }
+        check_vo(
+            cell,
+            k8,
+            q,
+            offset + ground_byte as u64 + (k * VO_BYTES) as u64,
+        )?;
     }
-    Ok(record_size(vos.len() as u8, ground_byte))
+    Ok(record_size(vos.len() as u8, ground_byte, Version::V2))
 }
 
+/// Appends a record checked by [`check_record`], in 2.0 (6-byte VOs).
 pub(super) fn push_record(out: &mut Vec<u8>, rec: &CellRecord, ground_byte: bool) {
     if let CellRecord::Vos { ground, vos } = rec {
         if !vos.is_empty() {
@@ -233,7 +262,7 @@ pub(super) fn push_record(out: &mut Vec<u8>, rec: &CellRecord, ground_byte: bool
                 out.push(*ground);
             }
             for q in vos.iter() {
-                out.extend_from_slice(&q.to_bytes_v1());
+                out.extend_from_slice(&q.to_bytes());
             }
         }
     }

@@ -1,32 +1,67 @@
-//! The store file (FORMAT.md section 5): header, index, block table, payload.
+//! The store file (FORMAT.md section 5): header, scene section (2.0), index, block table,
+//! payload.
 //!
-//! Input: untrusted bytes of a whole store file, or a [`Frame`] and one [`CellRecord`] per
-//! cell. Output: a borrowed [`Store`] that answers per-cell queries, or the file's bytes.
-//! Invariants: [`Store::parse`] checks rules S1..S16 of section 8.1 in order, once, in
+//! Input: untrusted bytes of a whole store file (major 2 or 1), or a [`Frame`], one
+//! [`CellRecord`] per cell and a [`SceneSection`]. Output: a borrowed [`Store`] that answers
+//! per-cell queries, or the file's bytes (2.0).
+//! Invariants: [`Store::parse`] checks the rules of section 8.1 in order, once, in
 //! O(cells + VOs), allocating nothing; [`Store::cell`] then reads at most 63 index bytes and
-//! one record; [`encode_store`] writes only what `parse` accepts, canonically.
+//! one record; [`encode_store_with`] writes only what `parse` accepts, canonically, in 2.0.
 
-use super::frame::{decode_frame, push_frame, validate_frame};
+use super::frame::{push_frame, read_frame, validate_frame, validate_frame_of};
 use super::records::{check_record, count_of, push_record, read_record, record_size, CellRecord};
 use super::{
-    exact_length, u32_at, FormatError, Reader, CELLS_PER_BLOCK, CRC_OFFSET, FRAME_LEN, HEADER_LEN,
-    MAJOR, MINOR, SKIPPED, STORE_MAGIC,
+    exact_length, u32_at, FormatError, Reader, Version, CELLS_PER_BLOCK, CRC_OFFSET, FRAME_LEN,
+    HEADER_LEN, MAJOR, MAX_CRS_LEN, MINOR, SCENE_FIXED_LEN, SKIPPED, STORE_MAGIC,
 };
 use crate::runtime::crc::{crc32, Crc32};
 use crate::runtime::frame::Frame;
 use crate::runtime::grid::CellId;
 
-/// A parsed store file. Borrows the bytes; every check is done once by [`Store::parse`], and
-/// each [`Store::cell`] reads at most 63 index bytes and one record, allocating nothing.
+/// The scene section of a 2.0 store (FORMAT.md section 5.2): what the store was baked from.
+/// Engines need none of it; it lets a tool check a store against its scene. A 1.0 store reads
+/// as [`SceneSection::NONE`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SceneSection<'a> {
+    /// How many objects the store was baked for; 0: not recorded.
+    pub objects: u32,
+    /// A fingerprint of the scene it was baked from, opaque; 0: not recorded.
+    pub scene: u64,
+    /// The name of the scene's coordinate reference system (e.g. `EPSG:3946`), at most 255
+    /// bytes of UTF-8; empty: unknown.
+    pub crs: &'a str,
+}
+
+impl SceneSection<'_> {
+    /// Nothing recorded: no object count, no fingerprint, no CRS.
+    pub const NONE: SceneSection<'static> = SceneSection {
+        objects: 0,
+        scene: 0,
+        crs: "",
+    };
+}
+
+impl Default for SceneSection<'_> {
+    fn default() -> Self {
+        SceneSection::NONE
+    }
+}
+
+/// A parsed store file (2.0 or 1.0). Borrows the bytes; every check is done once by
+/// [`Store::parse`], and each [`Store::cell`] reads at most 63 index bytes and one record,
+/// allocating nothing.
 #[derive(Clone, Copy, Debug)]
 pub struct Store<'a> {
     frame: Frame,
+    version: Version,
     minor: u16,
     cells: u32,
     ground_byte: bool,
+    section: SceneSection<'a>,
     index: &'a [u8],
     blocks: &'a [u8],
     payload: &'a [u8],
+    index_offset: u64,
     payload_offset: u64,
 }
 
@@ -35,8 +70,8 @@ fn blocks_of(cells: u64) -> u64 {
 }
 
 impl<'a> Store<'a> {
-    /// Checks a whole store file (FORMAT.md section 8.1, in order) in O(cells + VOs) and
-    /// borrows it.
+    /// Checks a whole store file of major 2 or 1 (FORMAT.md section 8.1, in order) in
+    /// O(cells + VOs) and borrows it.
     pub fn parse(bytes: &'a [u8]) -> Result<Store<'a>, FormatError> {
         let got = bytes.len() as u64;
         let (header, body) =
@@ -56,22 +91,45 @@ impl<'a> Store<'a> {
             return Err(FormatError::BadMagic);
         }
         let major = r.u16().ok_or(short.clone())?;
-        if major != MAJOR {
-            return Err(FormatError::UnsupportedVersion { major });
-        }
+        let version = Version::of(major).ok_or(FormatError::UnsupportedVersion { major })?;
         let minor = r.u16().ok_or(short.clone())?;
         let flags = r.u32().ok_or(short.clone())?;
         if flags != 0 {
             return Err(FormatError::UnknownFlags { flags });
         }
-        let frame = decode_frame(&r.take::<FRAME_LEN>().ok_or(short.clone())?)?;
+        let frame = read_frame(&mut Reader::new(
+            &r.take::<FRAME_LEN>().ok_or(short.clone())?,
+        ))
+        .ok_or(short.clone())?;
+        validate_frame_of(&frame, version)?;
         let payload_len = r.u32().ok_or(short.clone())?;
         let stored = r.u32().ok_or(short.clone())?;
+
+        // 2.0: the scene section's fixed part, which says how long the section is.
+        let (objects, scene, crs_len) = match version {
+            Version::V1 => (0, 0, 0u8),
+            Version::V2 => {
+                let needed = (HEADER_LEN + SCENE_FIXED_LEN) as u64;
+                let mut s = Reader::new(body);
+                let short = FormatError::Truncated { needed, got };
+                (
+                    s.u32().ok_or(short.clone())?,
+                    s.u64().ok_or(short.clone())?,
+                    s.u8().ok_or(short)?,
+                )
+            }
+        };
+        let section_len = match version {
+            Version::V1 => 0,
+            Version::V2 => (SCENE_FIXED_LEN + crs_len as usize) as u64,
+        };
 
         // At most 2^31 cells (rule F4): none of these sums can overflow a u64.
         let cells = frame.grid.cell_count();
         let blocks = blocks_of(cells);
-        let expected = HEADER_LEN as u64 + cells + 4 * blocks + payload_len as u64;
+        let index_offset = HEADER_LEN as u64 + section_len;
+        let payload_offset = index_offset + cells + 4 * blocks;
+        let expected = payload_offset + payload_len as u64;
         exact_length(expected, got)?;
 
         let mut crc = Crc32::new();
@@ -89,19 +147,34 @@ impl<'a> Store<'a> {
             needed: expected,
             got,
         };
+        let n_section = usize::try_from(section_len).map_err(|_| too_short.clone())?;
         let n_index = usize::try_from(cells).map_err(|_| too_short.clone())?;
         let n_blocks = usize::try_from(4 * blocks).map_err(|_| too_short.clone())?;
-        let (index, rest) = body.split_at_checked(n_index).ok_or(too_short.clone())?;
-        let (table, payload) = rest.split_at_checked(n_blocks).ok_or(too_short)?;
+        let (section, rest) = body.split_at_checked(n_section).ok_or(too_short.clone())?;
+        let (index, rest) = rest.split_at_checked(n_index).ok_or(too_short.clone())?;
+        let (table, payload) = rest.split_at_checked(n_blocks).ok_or(too_short.clone())?;
+
+        // S17: the CRS name is UTF-8.
+        let crs_bytes = section.get(SCENE_FIXED_LEN..).unwrap_or(&[]);
+        let crs = core::str::from_utf8(crs_bytes).map_err(|e| FormatError::CrsNotUtf8 {
+            offset: (HEADER_LEN + SCENE_FIXED_LEN + e.valid_up_to()) as u64,
+        })?;
         let store = Store {
             frame,
+            version,
             minor,
             cells: cells as u32,
             ground_byte: frame.per_cell_ground(),
+            section: SceneSection {
+                objects,
+                scene,
+                crs,
+            },
             index,
             blocks: table,
             payload,
-            payload_offset: HEADER_LEN as u64 + cells + 4 * blocks,
+            index_offset,
+            payload_offset,
         };
         store.check_index()?;
         store.check_offsets(payload_len)?;
@@ -116,11 +189,25 @@ impl<'a> Store<'a> {
                 return Err(FormatError::BadIndexByte {
                     cell: i as CellId,
                     value,
-                    offset: HEADER_LEN as u64 + i as u64,
+                    offset: self.index_offset + i as u64,
                 });
             }
         }
         Ok(())
+    }
+
+    /// Payload bytes of a cell with index value `value` (valid).
+    fn size_of(&self, value: u8) -> u64 {
+        record_size(count_of(value).unwrap_or(0), self.ground_byte, self.version)
+    }
+
+    /// Where the block table would end had it all its bytes (for a truncation error that
+    /// cannot happen after the length check).
+    fn table_short(&self) -> FormatError {
+        FormatError::Truncated {
+            needed: self.payload_offset,
+            got: self.index_offset + self.index.len() as u64 + self.blocks.len() as u64,
+        }
     }
 
     /// S11 and S12: the block table and `payload_len` agree with the counts.
@@ -130,10 +217,7 @@ impl<'a> Store<'a> {
             if i as u64 % CELLS_PER_BLOCK as u64 == 0 {
                 let block = (i as u64 / CELLS_PER_BLOCK as u64) as u32;
                 let stored =
-                    u32_at(self.blocks, block as u64 * 4).ok_or(FormatError::Truncated {
-                        needed: self.payload_offset,
-                        got: HEADER_LEN as u64 + self.index.len() as u64 + self.blocks.len() as u64,
-                    })?;
+                    u32_at(self.blocks, block as u64 * 4).ok_or_else(|| self.table_short())?;
                 if stored as u64 != off {
                     return Err(FormatError::BlockOffset {
                         block,
@@ -142,7 +226,7 @@ impl<'a> Store<'a> {
                     });
                 }
             }
-            off += record_size(count_of(value).unwrap_or(0), self.ground_byte);
+            off += self.size_of(value);
         }
         if off != payload_len as u64 {
             return Err(FormatError::PayloadLength {
@@ -153,7 +237,8 @@ impl<'a> Store<'a> {
         Ok(())
     }
 
-    /// S13: no degenerate VO.
+    /// S18, S19 and S13, VO by VO in file order: no reserved bit, canonical endpoints, no
+    /// degenerate VO.
     fn check_vos(&self) -> Result<(), FormatError> {
         let mut off: u64 = 0;
         for (i, &value) in self.index.iter().enumerate() {
@@ -161,14 +246,14 @@ impl<'a> Store<'a> {
             if n > 0 {
                 self.record_at(i as CellId, n, off)?;
             }
-            off += record_size(n, self.ground_byte);
+            off += self.size_of(value);
         }
         Ok(())
     }
 
     /// The record of `n >= 1` VOs of `cell` at payload offset `off`.
     fn record_at(&self, cell: CellId, n: u8, off: u64) -> Result<CellRecord, FormatError> {
-        let size = record_size(n, self.ground_byte);
+        let size = record_size(n, self.ground_byte, self.version);
         let file_off = self.payload_offset + off;
         let bytes = usize::try_from(off)
             .ok()
@@ -177,7 +262,7 @@ impl<'a> Store<'a> {
                 needed: file_off + size,
                 got: self.payload_offset + self.payload.len() as u64,
             })?;
-        read_record(cell, n, self.ground_byte, bytes, file_off)
+        read_record(cell, n, self.ground_byte, self.version, bytes, file_off)
     }
 
     /// The frame stored in the header.
@@ -187,12 +272,50 @@ impl<'a> Store<'a> {
 
     /// `(major, minor)` of the file.
     pub fn version(&self) -> (u16, u16) {
-        (MAJOR, self.minor)
+        (self.version.major(), self.minor)
+    }
+
+    /// The file's major version: 2, or 1 for a store written before 2.0.
+    pub fn major(&self) -> u16 {
+        self.version.major()
+    }
+
+    /// Bytes per stored VO in this file: 6 (2.0) or 5 (1.0).
+    pub fn vo_bytes(&self) -> usize {
+        self.version.vo_bytes()
+    }
+
+    /// The scene section ([`SceneSection::NONE`] for a 1.0 store).
+    pub fn scene_section(&self) -> SceneSection<'a> {
+        self.section
+    }
+
+    /// How many objects the store was baked for; 0: not recorded (always for 1.0).
+    pub fn objects(&self) -> u32 {
+        self.section.objects
+    }
+
+    /// The fingerprint of the scene the store was baked from; 0: not recorded (always for 1.0).
+    pub fn scene(&self) -> u64 {
+        self.section.scene
+    }
+
+    /// The name of the scene's coordinate reference system; empty: unknown (always for 1.0).
+    pub fn crs(&self) -> &'a str {
+        self.section.crs
     }
 
     /// Number of cells, `nx * ny`.
     pub fn cell_count(&self) -> u32 {
         self.cells
+    }
+
+    /// Bytes of cell `id` in the file: its index byte and its payload record (0 outside the
+    /// grid).
+    pub fn cell_bytes(&self, id: CellId) -> u64 {
+        self.index
+            .get(id as usize)
+            .map_or(0, |&v| 1 + self.size_of(v))
     }
 
     /// The record of cell `id`: reads at most 63 index bytes and the record.
@@ -205,7 +328,7 @@ impl<'a> Store<'a> {
         let n = count_of(value).ok_or(FormatError::BadIndexByte {
             cell: id,
             value,
-            offset: HEADER_LEN as u64 + id as u64,
+            offset: self.index_offset + id as u64,
         })?;
         if value == SKIPPED {
             return Ok(CellRecord::Skipped);
@@ -215,12 +338,10 @@ impl<'a> Store<'a> {
         }
         let block = id / CELLS_PER_BLOCK;
         let start = (block * CELLS_PER_BLOCK) as usize;
-        let mut off = u32_at(self.blocks, block as u64 * 4).ok_or(FormatError::Truncated {
-            needed: self.payload_offset,
-            got: HEADER_LEN as u64 + self.index.len() as u64 + self.blocks.len() as u64,
-        })? as u64;
+        let mut off =
+            u32_at(self.blocks, block as u64 * 4).ok_or_else(|| self.table_short())? as u64;
         for &v in self.index.get(start..id as usize).unwrap_or(&[]) {
-            off += record_size(count_of(v).unwrap_or(0), self.ground_byte);
+            off += self.size_of(v);
         }
         self.record_at(id, n, off)
     }
@@ -231,9 +352,27 @@ impl<'a> Store<'a> {
     }
 }
 
-/// Encodes a store file: `cells[i]` is the record of cell `i` (`cells.len() == nx * ny`).
+/// Encodes a 2.0 store file with an empty scene section ([`SceneSection::NONE`]): `cells[i]` is
+/// the record of cell `i` (`cells.len() == nx * ny`).
 pub fn encode_store(frame: &Frame, cells: &[CellRecord]) -> Result<Vec<u8>, FormatError> {
+    encode_store_with(frame, cells, &SceneSection::NONE)
+}
+
+/// Encodes a 2.0 store file with its scene section: `cells[i]` is the record of cell `i`
+/// (`cells.len() == nx * ny`). Refuses (in this order) a frame that breaks a rule of 4.1, a CRS
+/// name over 255 bytes, another number of records than cells, and a record a decoder would
+/// refuse.
+pub fn encode_store_with(
+    frame: &Frame,
+    cells: &[CellRecord],
+    scene: &SceneSection<'_>,
+) -> Result<Vec<u8>, FormatError> {
     validate_frame(frame)?;
+    let crs = scene.crs.as_bytes();
+    let crs_len = u8::try_from(crs.len())
+        .ok()
+        .filter(|&n| n as usize <= MAX_CRS_LEN)
+        .ok_or(FormatError::CrsTooLong { len: crs.len() })?;
     let n = frame.grid.cell_count();
     if cells.len() as u64 != n {
         return Err(FormatError::CellCount {
@@ -243,7 +382,8 @@ pub fn encode_store(frame: &Frame, cells: &[CellRecord]) -> Result<Vec<u8>, Form
     }
     let ground_byte = frame.per_cell_ground();
     let blocks = blocks_of(n);
-    let payload_offset = HEADER_LEN as u64 + n + 4 * blocks;
+    let index_offset = (HEADER_LEN + SCENE_FIXED_LEN + crs.len()) as u64;
+    let payload_offset = index_offset + n + 4 * blocks;
     let mut table = Vec::with_capacity(blocks as usize);
     let mut payload_len: u64 = 0;
     for (i, rec) in cells.iter().enumerate() {
@@ -263,6 +403,10 @@ pub fn encode_store(frame: &Frame, cells: &[CellRecord]) -> Result<Vec<u8>, Form
     push_frame(&mut out, frame);
     out.extend_from_slice(&payload_len32.to_le_bytes());
     out.extend_from_slice(&[0; 4]);
+    out.extend_from_slice(&scene.objects.to_le_bytes());
+    out.extend_from_slice(&scene.scene.to_le_bytes());
+    out.push(crs_len);
+    out.extend_from_slice(crs);
     out.extend(cells.iter().map(|r| r.index_byte()));
     for off in table {
         // Each entry is at most payload_len, which fits a u32.
