@@ -42,6 +42,19 @@ pub struct ReadArgs {
     /// (comma-separated, as the file writes them: Bridge,OtherConstruction,+GenericCityObject).
     #[arg(long, value_delimiter = ',', value_name = "TYPE,...")]
     pub types: Vec<String>,
+    /// Footprints: attribute with the height of the bottom above the base, metres (a part
+    /// standing on others; OpenStreetMap's tag is the default, read where present).
+    #[arg(long, value_name = "NAME", default_value = "min_height")]
+    pub min_height_attr: String,
+    /// Footprints: attribute with the storey the bottom starts at, when the bottom's height is
+    /// missing.
+    #[arg(long, value_name = "NAME", default_value = "building:min_level")]
+    pub min_levels_attr: String,
+    /// The metric CRS to project the scene into (EPSG:N). Default: the CRS the input states;
+    /// longitude/latitude input (stated, or detected: every coordinate within range) goes to the
+    /// UTM zone of its centre.
+    #[arg(long, value_name = "EPSG:N")]
+    pub crs: Option<String>,
 }
 
 /// `--on-bad-height`.
@@ -65,6 +78,9 @@ impl ReadArgs {
             },
             default_height: self.default_height,
             types: self.types.iter().map(|t| t.trim().to_string()).collect(),
+            min_height_attr: Some(self.min_height_attr.clone()).filter(|s| !s.is_empty()),
+            min_levels_attr: Some(self.min_levels_attr.clone()).filter(|s| !s.is_empty()),
+            crs: self.crs.clone(),
         }
     }
 }

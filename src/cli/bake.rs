@@ -150,6 +150,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
         None => None,
     };
     let s = scene::load(&a.scene, &a.read.options())?;
+    for n in &s.report.notes {
+        eprintln!("note: {n}");
+    }
     let load_s = t0.elapsed().as_secs_f64();
     let region = a.region.map(|[x0, y0, x1, y1]| {
         [

@@ -20,6 +20,11 @@ pub enum Location {
     CityObject(String),
     /// A vertex, 0-based as in the file's vertex list.
     Vertex(usize),
+    /// A named element: an OpenStreetMap `way 123` or `relation 45`, a GeoPackage table row.
+    Element(String),
+    /// A place inside one line of a line-delimited file (CityJSONSeq): the 1-based line, then
+    /// the place within that line's document.
+    InLine { line: usize, inner: Box<Location> },
 }
 
 impl fmt::Display for Location {
@@ -34,6 +39,11 @@ impl fmt::Display for Location {
             Location::Feature(i) => write!(f, "feature {i}"),
             Location::CityObject(id) => write!(f, "city object {id:?}"),
             Location::Vertex(i) => write!(f, "vertex {i}"),
+            Location::Element(e) => f.write_str(e),
+            Location::InLine { line, inner } => match **inner {
+                Location::File => write!(f, "line {line}"),
+                ref i => write!(f, "line {line}, {i}"),
+            },
         }
     }
 }
@@ -45,8 +55,41 @@ pub enum LoadErrorKind {
     Io(String),
     #[error("the file is empty")]
     Empty,
-    #[error("unknown file format (expected .geojson/.json GeoJSON, .json CityJSON or .obj)")]
+    #[error("unknown file format (vocc reads .geojson/.json GeoJSON, .json/.city.json CityJSON, .city.jsonl/.jsonl CityJSONSeq, .gml/.xml CityGML 2.0, .osm.pbf OpenStreetMap, .gpkg GeoPackage, .fgb FlatGeobuf, .shp Shapefile and .obj)")]
     UnknownFormat,
+    /// A format vocc does not read, with a tool that converts it to one it does.
+    #[error("{format} files are not read by vocc; convert it first, e.g. {hint}")]
+    UnsupportedFormat { format: String, hint: String },
+    /// The same file given twice (compared as files, not names).
+    #[error("the same file as input {} is given again; give each file once (its objects would be doubled)", first.display())]
+    DuplicateFile { first: PathBuf },
+    /// Two inputs in CRSs that cannot be put into one.
+    #[error("inputs in two coordinate reference systems: {} is in {a_crs}, {} is in {b_crs}; {why}", a_file.display(), b_file.display())]
+    MixedCrs {
+        a_file: PathBuf,
+        a_crs: String,
+        b_file: PathBuf,
+        b_crs: String,
+        why: String,
+    },
+    /// A point could not be projected.
+    #[error("cannot project from {from} to {to}: {message}")]
+    Projection {
+        from: String,
+        to: String,
+        message: String,
+    },
+    /// A height or base that is a number, but beyond what any building has.
+    #[error("attribute {attr:?} has value {} m, beyond the {limit} m a {what} may have; --on-bad-height skip passes over such values", short(*value))]
+    AbsurdHeight {
+        attr: String,
+        what: &'static str,
+        value: f64,
+        limit: f64,
+    },
+    /// A companion file a format needs is missing (a Shapefile's `.dbf` for its attributes).
+    #[error("{} is missing; {why}", path.display())]
+    MissingCompanion { path: PathBuf, why: String },
     #[error("malformed JSON: {0}")]
     MalformedJson(String),
     #[error("malformed OBJ: {0}")]
