@@ -9,7 +9,7 @@
 # fuzz/corpus.full/<target>/ (ignored by git). Needs the targets built (`fuzz/run.sh` builds them).
 set -eu
 cd "$(dirname "$0")"
-targets=${*:-store blob geojson cityjson obj walkable}
+targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq}
 bin=target/$(rustc +nightly -vV | sed -n 's/^host: //p')/release
 for t in $targets; do
     rm -rf "corpus.full/$t" "corpus.min/$t"

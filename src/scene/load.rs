@@ -119,7 +119,7 @@ fn unsupported(path: &Path) -> Option<LoadError> {
             "raster",
             "vocc reads buildings, not terrain rasters; give the buildings (GeoJSON, CityJSON, OBJ, ...)".to_string(),
         ),
-        "csv" | "tab" | "mif" | "sqlite" | "gdb" | "zip" => (
+        "tab" | "mif" | "sqlite" | "gdb" | "zip" => (
             "GIS table",
             format!("ogr2ogr -f GPKG {stem}.gpkg {} (or -f GeoJSON)", path.display()),
         ),
