@@ -360,7 +360,7 @@ fn citygml_bad_coordinate_truncated_not_citygml() {
     assert!(matches!(e.location, Location::Line { line: 7, .. }), "{e}");
     let e = load_broken("citygml_truncated.gml");
     assert!(malformed_of(&e).1.contains("truncated"), "{e}");
-    assert!(matches!(e.location, Location::Line { line: 6, .. }), "{e}");
+    assert!(matches!(e.location, Location::Line { line: 7, .. }), "{e}");
     let e = load_broken("citygml_not_citygml.xml");
     assert!(malformed_of(&e).1.contains("CityModel"), "{e}");
 }

@@ -1264,7 +1264,11 @@ fn messages_blame_the_height_print_1e300_short_and_ask_for_height_attr() {
     );
     let (rc, err) = run(&["info", &tall, "--height-attr", "height"]);
     assert_eq!(rc, Some(1));
-    assert!(err.contains("height = 1e9 m is out of range"), "{err}");
+    // Issue 33, defect 7: a height beyond 1,000 m is a bad height; here the only one.
+    assert!(
+        err.contains("feature 0: \"height\" is 1e9 m, beyond the 1000 m a height may have"),
+        "{err}"
+    );
     assert!(!err.contains("coordinate"), "{err}");
     let (rc, err) = run(&["info", &far, "--height-attr", "height"]);
     assert_eq!(rc, Some(1));

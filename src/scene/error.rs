@@ -110,7 +110,9 @@ pub enum LoadErrorKind {
     },
     #[error("unknown geometry type {0:?}")]
     UnknownGeometryType(String),
-    #[error("attribute {attr:?} is missing from every feature; {hint}")]
+    #[error(
+        "attribute {attr:?} gives no feature a height (missing, or not usable, everywhere); {hint}"
+    )]
     MissingAttribute { attr: String, hint: String },
     /// GeoJSON footprints carry no height, and no attribute to read one from was named.
     #[error("GeoJSON footprints need a height: give --height-attr NAME (or --levels-attr NAME for storey counts)")]

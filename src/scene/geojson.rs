@@ -520,13 +520,21 @@ impl<'a> GeoJsonReader<'a> {
                 .or_else(|| self.keys.levels.clone())
                 .unwrap_or_default();
             let names = self.first_attributes.unwrap_or_default();
+            // The first bad value, when the heights are there but none is usable.
+            let bad = self.out.skipped.iter().find_map(|s| match &s.reason {
+                SkipReason::BadHeight { attr, value } => {
+                    Some(format!(" ({}: {attr:?} is {value})", s.location))
+                }
+                _ => None,
+            });
             return Err(LoadError::new(
                 self.path,
                 Location::File,
                 LoadErrorKind::MissingAttribute {
                     attr,
                     hint: format!(
-                        "no feature has a usable height; the first feature's attributes are: {}",
+                        "no feature has a usable height{}; the first feature's attributes are: {}",
+                        bad.unwrap_or_default(),
                         names.join(", ")
                     ),
                 },
