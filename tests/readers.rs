@@ -383,16 +383,10 @@ fn defect1_inputs_in_two_crs_are_projected_or_refused_by_name() {
     // Beside a file that states no CRS (an OBJ, metres of unknown origin): refused by name.
     let obj = "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     let e = load_text(&[("ll.geojson", &lonlat("")), ("m.obj", obj)], &h()).unwrap_err();
-    let LoadErrorKind::MixedCrs {
-        a_file,
-        a_crs,
-        b_file,
-        b_crs,
-        ..
-    } = &e.kind
-    else {
+    let LoadErrorKind::MixedCrs(c) = &e.kind else {
         panic!("{e}")
     };
+    let (a_file, a_crs, b_file, b_crs) = (&c.a_file, &c.a_crs, &c.b_file, &c.b_crs);
     assert_eq!(a_file, &PathBuf::from("ll.geojson"));
     assert!(a_crs.contains("EPSG:4326"), "{a_crs}");
     assert_eq!(b_file, &PathBuf::from("m.obj"));
@@ -410,7 +404,7 @@ fn defect1_inputs_in_two_crs_are_projected_or_refused_by_name() {
         }
     })
     .unwrap_err();
-    assert!(matches!(e.kind, LoadErrorKind::MixedCrs { .. }), "{e}");
+    assert!(matches!(e.kind, LoadErrorKind::MixedCrs(_)), "{e}");
     let m = e.to_string();
     assert!(
         m.contains("EPSG:3946") && m.contains("My local grid") && m.contains("local.geojson"),

@@ -248,7 +248,7 @@ fn wkt_name(t: &str) -> Option<String> {
 
 /// Whether all these xy lie within longitude/latitude range and no object spans
 /// [`MAX_DEGREES_SPAN`] or more: see the module header. `objects` yields each object's points.
-pub fn looks_geographic<'a, I, J>(objects: I) -> bool
+pub fn looks_geographic<I, J>(objects: I) -> bool
 where
     I: IntoIterator<Item = J>,
     J: IntoIterator<Item = DVec2>,

@@ -64,21 +64,12 @@ pub enum LoadErrorKind {
     #[error("the same file as input {} is given again; give each file once (its objects would be doubled)", first.display())]
     DuplicateFile { first: PathBuf },
     /// Two inputs in CRSs that cannot be put into one.
-    #[error("inputs in two coordinate reference systems: {} is in {a_crs}, {} is in {b_crs}; {why}", a_file.display(), b_file.display())]
-    MixedCrs {
-        a_file: PathBuf,
-        a_crs: String,
-        b_file: PathBuf,
-        b_crs: String,
-        why: String,
-    },
-    /// A point could not be projected.
-    #[error("cannot project from {from} to {to}: {message}")]
-    Projection {
-        from: String,
-        to: String,
-        message: String,
-    },
+    #[error("inputs in two coordinate reference systems: {} is in {}, {} is in {}; {}", .0.a_file.display(), .0.a_crs, .0.b_file.display(), .0.b_crs, .0.why)]
+    MixedCrs(Box<CrsConflict>),
+    /// A point could not be projected, or `--crs` names no projected CRS: `what` says from and
+    /// to what (`EPSG:4326 to EPSG:32631`).
+    #[error("cannot project {what}: {message}")]
+    Projection { what: String, message: String },
     /// A height or base that is a number, but beyond what any building has.
     #[error("attribute {attr:?} has value {} m, beyond the {limit} m a {what} may have; --on-bad-height skip passes over such values", short(*value))]
     AbsurdHeight {
@@ -147,6 +138,16 @@ fn types_hint(held: &[(String, usize)]) -> String {
     } else {
         format!("; read them with --types {}", t.join(","))
     }
+}
+
+/// Two inputs whose CRSs cannot be put into one: each file and its CRS, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CrsConflict {
+    pub a_file: PathBuf,
+    pub a_crs: String,
+    pub b_file: PathBuf,
+    pub b_crs: String,
+    pub why: String,
 }
 
 /// A reader error: the file, the place in it, and what is wrong.

@@ -24,7 +24,7 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
 use super::crs::{self, Crs, CrsSource, Projector};
-use super::error::{check_coord, LoadError, LoadErrorKind, Location};
+use super::error::{check_coord, CrsConflict, LoadError, LoadErrorKind, Location};
 use super::{
     citygml, decompose, fgb, footprint, gpkg, json, obj, osm, shp, solid, walls, Aabb3, Blocker,
     FileRead, FileStats, Footprint, NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene,
@@ -386,8 +386,7 @@ fn resolve_crs(
                     &first,
                     Location::File,
                     LoadErrorKind::Projection {
-                        from: "the input".into(),
-                        to: text.clone(),
+                        what: format!("the input to {text}"),
                         message: "--crs takes a projected (metric) CRS known by its EPSG code, e.g. EPSG:32631".into(),
                     },
                 ));
@@ -453,13 +452,13 @@ fn resolve_crs(
                 return Err(LoadError::new(
                     &paths[fi],
                     Location::File,
-                    LoadErrorKind::MixedCrs {
+                    LoadErrorKind::MixedCrs(Box::new(CrsConflict {
                         a_file,
                         a_crs,
                         b_file: paths[fi].clone(),
                         b_crs: "no CRS stated".into(),
                         why: "a file that states no CRS cannot be placed beside longitude/latitude input; give both in one CRS, or state it (--crs for the scene)".into(),
-                    },
+                    })),
                 ));
             }
             continue;
@@ -476,13 +475,13 @@ fn resolve_crs(
             LoadError::new(
                 &paths[fi],
                 Location::File,
-                LoadErrorKind::MixedCrs {
+                LoadErrorKind::MixedCrs(Box::new(CrsConflict {
                     a_file,
                     a_crs,
                     b_file: paths[fi].clone(),
                     b_crs: c.name.clone(),
                     why: format!("vocc cannot project one into the other ({why})"),
-                },
+                })),
             )
         })?;
         project_read(&paths[fi], read, &p, &c.name, &target.name)?;
@@ -506,8 +505,7 @@ fn project_read(
             path,
             at.clone(),
             LoadErrorKind::Projection {
-                from: from.to_string(),
-                to: to.to_string(),
+                what: format!("{from} to {to}"),
                 message: what,
             },
         )

@@ -43,7 +43,7 @@ use std::path::PathBuf;
 use glam::{DVec2, DVec3};
 
 pub use crs::{Crs, CrsSource};
-pub use error::{LoadError, LoadErrorKind, Location};
+pub use error::{CrsConflict, LoadError, LoadErrorKind, Location};
 pub use load::{load, load_bytes};
 
 /// Options shared by the readers.
