@@ -5,7 +5,7 @@
 //! `metadata.referenceSystem`, a GeoPackage's `gpkg_spatial_ref_sys` row, a FlatGeobuf header, a
 //! Shapefile's `.prj`, a CityGML `srsName`; OpenStreetMap is WGS84 by definition), or nothing.
 //! Output: a [`Crs`] per file and one for the scene, and the points projected where needed.
-//! Rules (ARCHITECTURE.md, "Coordinate reference systems"):
+//! Rules (ARCHITECTURE.md, "Coordinate reference systems"; README, "Coordinates"):
 //! - a declared CRS is parsed for an EPSG code (`EPSG:3946`, `urn:ogc:def:crs:EPSG::3946`,
 //!   `http://www.opengis.net/def/crs/EPSG/0/3946`, the first code of a compound URN, WKT's last
 //!   `AUTHORITY["EPSG",...]` or `ID["EPSG",...]`); OGC `CRS84` is longitude/latitude on WGS84;
