@@ -58,6 +58,23 @@ pub fn read_gpkg(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<FileRe
     conn.deserialize_read_exact(MAIN_DB, bytes, bytes.len(), true)
         .map_err(sql(Location::File))?;
 
+    // Only stored tables are read: a view (or a virtual table) could compute rows without end,
+    // while a table's rows are bounded by the file.
+    let is_table = |name: &str| -> Result<bool, LoadError> {
+        conn.query_row(
+            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = ?1 AND sql NOT LIKE 'CREATE VIRTUAL%'",
+            [name],
+            |r| r.get::<_, i64>(0),
+        )
+        .map(|n| n > 0)
+        .map_err(sql(Location::File))
+    };
+    if !is_table("gpkg_geometry_columns")? {
+        return Err(malformed(
+            Location::File,
+            "no gpkg_geometry_columns table, so no feature table".into(),
+        ));
+    }
     let tables: Vec<(String, String, i64)> = {
         let mut st = conn
             .prepare(
@@ -78,6 +95,12 @@ pub fn read_gpkg(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<FileRe
     let mut crs: Option<Crs> = None;
     for (table, column, srs) in &tables {
         let at_table = Location::Element(format!("table {table:?}"));
+        if !is_table(table)? {
+            return Err(malformed(
+                at_table,
+                "not a stored table (a view or virtual table is not read)".into(),
+            ));
+        }
         if crs.is_none() {
             crs = srs_crs(&conn, *srs).map_err(sql(at_table.clone()))?;
         }
