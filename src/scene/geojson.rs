@@ -511,7 +511,13 @@ impl<'a> GeoJsonReader<'a> {
     /// name is almost certainly wrong.
     pub fn finish(mut self) -> Result<FileRead, LoadError> {
         self.out.items = self.features;
-        if !self.saw_height && self.features > 0 && !self.out.skipped.is_empty() {
+        let for_height = self.out.skipped.iter().any(|s| {
+            matches!(
+                s.reason,
+                SkipReason::NoHeight | SkipReason::BadHeight { .. }
+            )
+        });
+        if !self.saw_height && self.features > 0 && for_height {
             let attr = self
                 .keys
                 .height
@@ -533,7 +539,7 @@ impl<'a> GeoJsonReader<'a> {
                 LoadErrorKind::MissingAttribute {
                     attr,
                     hint: format!(
-                        "no feature has a usable height{}; the first feature's attributes are: {}",
+                        "no feature has a usable height{}; the first feature's attributes are: {}; --default-height M reads them at M metres",
                         bad.unwrap_or_default(),
                         names.join(", ")
                     ),

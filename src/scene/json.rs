@@ -113,7 +113,12 @@ pub fn is_cityjson_seq(bytes: &[u8]) -> bool {
     let Some(first) = lines.next() else {
         return false;
     };
-    lines.next().is_some()
+    // Cheap tests first: a one-line GeoJSON of 10^6 features is never parsed twice.
+    let has = |l: &[u8], w: &[u8]| l.windows(w.len()).any(|x| x == w);
+    let Some(second) = lines.next() else {
+        return false;
+    };
+    has(second, b"\"CityJSONFeature\"")
         && serde_json::from_slice::<Value>(first)
             .ok()
             .is_some_and(|v| v.get("type").and_then(Value::as_str) == Some("CityJSON"))
