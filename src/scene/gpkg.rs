@@ -105,10 +105,34 @@ pub fn read_gpkg(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<FileRe
             crs = srs_crs(&conn, *srs).map_err(sql(at_table.clone()))?;
         }
         let quoted = table.replace('"', "\"\"");
+        // The column names as values (rusqlite's `column_names` panics on a name that is not
+        // UTF-8; found by fuzzing, `tests/fixtures/broken/gpkg_fuzz_*`), in the table's order.
+        let names: Vec<String> = {
+            let mut st = conn
+                .prepare("SELECT name FROM pragma_table_info(?1) ORDER BY cid")
+                .map_err(sql(at_table.clone()))?;
+            let mut rows = st.query([table]).map_err(sql(at_table.clone()))?;
+            let mut names = Vec::new();
+            while let Some(r) = rows.next().map_err(sql(at_table.clone()))? {
+                names.push(match r.get_ref(0).map_err(sql(at_table.clone()))? {
+                    ValueRef::Text(t) | ValueRef::Blob(t) => {
+                        String::from_utf8_lossy(t).into_owned()
+                    }
+                    _ => String::new(),
+                });
+            }
+            names
+        };
+        let list: Vec<String> = names
+            .iter()
+            .map(|n| format!("\"{}\"", n.replace('"', "\"\"")))
+            .collect();
+        if list.is_empty() {
+            return Err(malformed(at_table, "the table has no columns".into()));
+        }
         let mut st = conn
-            .prepare(&format!("SELECT * FROM \"{quoted}\""))
+            .prepare(&format!("SELECT {} FROM \"{quoted}\"", list.join(", ")))
             .map_err(sql(at_table.clone()))?;
-        let names: Vec<String> = st.column_names().iter().map(|s| s.to_string()).collect();
         let Some(gcol) = names.iter().position(|n| n.eq_ignore_ascii_case(column)) else {
             return Err(malformed(
                 at_table,

@@ -62,7 +62,33 @@ struct Relation {
 }
 
 /// Reads an OpenStreetMap PBF extract. See the module header.
+///
+/// osmpbf 0.3.7 panics on a relation member of an unknown type (its `RelMemberType::from`
+/// unwraps the protobuf enum; found by fuzzing, `tests/fixtures/broken/osm_fuzz_*`): the passes
+/// run under `catch_unwind`, and such a panic is a malformed-file error like any other. (Under
+/// cargo-fuzz, whose panic hook aborts, that input still shows as a crash.)
 pub fn read_pbf(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<FileRead, LoadError> {
+    match std::panic::catch_unwind(|| read_pbf_inner(path, bytes, opts)) {
+        Ok(r) => r,
+        Err(p) => {
+            let why = p
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic".into());
+            Err(LoadError::new(
+                path,
+                Location::File,
+                LoadErrorKind::Malformed {
+                    format: FORMAT,
+                    message: format!("the PBF decoder (osmpbf) failed: {why}"),
+                },
+            ))
+        }
+    }
+}
+
+fn read_pbf_inner(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<FileRead, LoadError> {
     let malformed = |e: osmpbf::Error| {
         LoadError::new(
             path,

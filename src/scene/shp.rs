@@ -52,6 +52,7 @@ pub fn read_shp(
             },
         ));
     }
+    check_records(shp).map_err(|(i, m)| malformed(Location::Feature(i), "", m))?;
     let mut shapes = ShapeReader::new(Cursor::new(shp))
         .map_err(|e| malformed(Location::File, "", e.to_string()))?;
     let mut records = match dbf {
@@ -102,6 +103,78 @@ pub fn read_shp(
         .map(|t| Crs::parse(&t));
     reader.set_crs(crs);
     reader.finish()
+}
+
+/// Checks every record's header and its part and point counts against the bytes the record holds,
+/// before the shapefile crate reads it (it reserves memory for the counts a record states: a
+/// 400-byte file asked for 6.9 GB when fuzzed, `tests/fixtures/broken/shp_fuzz_*`). Returns the
+/// record index and what is wrong.
+fn check_records(b: &[u8]) -> Result<(), (usize, String)> {
+    let i32_le = |at: usize| -> Option<i64> {
+        Some(i32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?) as i64)
+    };
+    let i32_be = |at: usize| -> Option<i64> {
+        Some(i32::from_be_bytes(b.get(at..at + 4)?.try_into().ok()?) as i64)
+    };
+    if b.len() < 100 {
+        return Err((
+            0,
+            format!("{} bytes: shorter than the 100-byte header", b.len()),
+        ));
+    }
+    let mut at = 100usize;
+    let mut i = 0usize;
+    while at + 8 <= b.len() {
+        let words = i32_be(at + 4).unwrap_or(-1);
+        if words < 0 {
+            return Err((i, format!("record length {words}")));
+        }
+        let len = words as usize * 2;
+        let start = at + 8;
+        let Some(end) = start.checked_add(len).filter(|&e| e <= b.len()) else {
+            return Err((
+                i,
+                format!("a record of {len} bytes does not fit in the file"),
+            ));
+        };
+        let ty = if len >= 4 {
+            i32_le(start).unwrap_or(0)
+        } else {
+            0
+        };
+        // Counts and the bytes per item after them: polylines, polygons, multipatches (parts and
+        // points), multipoints (points).
+        let need = match ty {
+            3 | 5 | 13 | 15 | 23 | 25 | 31 => {
+                let parts = i32_le(start + 36).unwrap_or(-1);
+                let points = i32_le(start + 40).unwrap_or(-1);
+                if parts < 0 || points < 0 {
+                    return Err((i, format!("{parts} parts, {points} points")));
+                }
+                let per_part = if ty == 31 { 8 } else { 4 };
+                Some(44 + per_part * parts + 16 * points)
+            }
+            8 | 18 | 28 => {
+                let points = i32_le(start + 36).unwrap_or(-1);
+                if points < 0 {
+                    return Err((i, format!("{points} points")));
+                }
+                Some(40 + 16 * points)
+            }
+            _ => None,
+        };
+        if let Some(n) = need {
+            if n > len as i64 {
+                return Err((
+                    i,
+                    format!("its counts need {n} bytes, and the record holds {len}"),
+                ));
+            }
+        }
+        at = end;
+        i += 1;
+    }
+    Ok(())
 }
 
 /// Polygons from Shapefile rings: an outer ring starts one, inner rings are its holes.
