@@ -14,7 +14,7 @@ use std::path::Path;
 
 use glam::DVec2;
 use serde_json::{Map, Number, Value};
-use shapefile::{PolygonRing, Shape, ShapeReader};
+use shapefile::{PolygonRing, ReadableShape, Shape};
 
 use super::geojson::FootprintReader;
 use super::{Crs, FileRead, LoadError, LoadErrorKind, Location, ReadOptions, Ring, SkipReason};
@@ -52,9 +52,7 @@ pub fn read_shp(
             },
         ));
     }
-    check_records(shp).map_err(|(i, m)| malformed(Location::Feature(i), "", m))?;
-    let mut shapes = ShapeReader::new(Cursor::new(shp))
-        .map_err(|e| malformed(Location::File, "", e.to_string()))?;
+    let contents = records(shp).map_err(|(i, m)| malformed(Location::Feature(i), "", m))?;
     let mut records = match dbf {
         Some(b) => Some(
             shapefile::dbase::Reader::new(Cursor::new(b))
@@ -67,9 +65,12 @@ pub fn read_shp(
         .map(|r| r.fields().iter().map(|f| f.name().to_string()).collect())
         .unwrap_or_default();
     let mut record_iter = records.as_mut().map(|r| r.iter_records());
-    for (i, shape) in shapes.iter_shapes().enumerate() {
+    for (i, content) in contents.into_iter().enumerate() {
         let at = Location::Feature(i);
-        let shape = shape.map_err(|e| malformed(at.clone(), "", e.to_string()))?;
+        // Each record is read from its own bytes, so a shape that says less or more than its
+        // record holds cannot shift the records after it.
+        let shape = Shape::read_from(&mut Cursor::new(content), content.len() as i32)
+            .map_err(|e| malformed(at.clone(), "", e.to_string()))?;
         let mut props = Map::new();
         if let Some(it) = record_iter.as_mut() {
             let rec = it
@@ -105,11 +106,13 @@ pub fn read_shp(
     reader.finish()
 }
 
-/// Checks every record's header and its part and point counts against the bytes the record holds,
-/// before the shapefile crate reads it (it reserves memory for the counts a record states: a
-/// 400-byte file asked for 6.9 GB when fuzzed, `tests/fixtures/broken/shp_fuzz_*`). Returns the
-/// record index and what is wrong.
-fn check_records(b: &[u8]) -> Result<(), (usize, String)> {
+/// The records' contents (shape type onwards), each checked against its header and its part and
+/// point counts against the bytes it holds, before the shapefile crate reads it: the crate
+/// reserves memory for the counts a record states (a 393-byte file asked for 6.9 GB when fuzzed,
+/// `tests/fixtures/broken/shp_fuzz_*`), and reading the file as one stream, a record that holds
+/// more bytes than its shape uses would shift the next record's header (16 GB, found next).
+/// Returns the record index and what is wrong.
+fn records(b: &[u8]) -> Result<Vec<&[u8]>, (usize, String)> {
     let i32_le = |at: usize| -> Option<i64> {
         Some(i32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?) as i64)
     };
@@ -122,8 +125,12 @@ fn check_records(b: &[u8]) -> Result<(), (usize, String)> {
             format!("{} bytes: shorter than the 100-byte header", b.len()),
         ));
     }
+    if i32_be(0) != Some(9994) {
+        return Err((0, "no Shapefile file code (9994) at the start".into()));
+    }
     let mut at = 100usize;
     let mut i = 0usize;
+    let mut out = Vec::new();
     while at + 8 <= b.len() {
         let words = i32_be(at + 4).unwrap_or(-1);
         if words < 0 {
@@ -152,7 +159,23 @@ fn check_records(b: &[u8]) -> Result<(), (usize, String)> {
                     return Err((i, format!("{parts} parts, {points} points")));
                 }
                 let per_part = if ty == 31 { 8 } else { 4 };
-                Some(44 + per_part * parts + 16 * points)
+                let need = 44 + per_part * parts + 16 * points;
+                if need <= len as i64 {
+                    // Each part starts at a point of the record, in order: the crate sizes a
+                    // part by the difference of two starts (a start of -9e8 asked for 28 GB).
+                    let mut last = 0;
+                    for k in 0..parts as usize {
+                        let first = i32_le(start + 44 + 4 * k).unwrap_or(-1);
+                        if first < last || first > points || (k == 0 && first != 0) {
+                            return Err((
+                                i,
+                                format!("part {k} starts at point {first} (of {points})"),
+                            ));
+                        }
+                        last = first;
+                    }
+                }
+                Some(need)
             }
             8 | 18 | 28 => {
                 let points = i32_le(start + 36).unwrap_or(-1);
@@ -171,10 +194,14 @@ fn check_records(b: &[u8]) -> Result<(), (usize, String)> {
                 ));
             }
         }
+        if len < 4 {
+            return Err((i, format!("a record of {len} bytes has no shape type")));
+        }
+        out.push(&b[start..end]);
         at = end;
         i += 1;
     }
-    Ok(())
+    Ok(out)
 }
 
 /// Polygons from Shapefile rings: an outer ring starts one, inner rings are its holes.
