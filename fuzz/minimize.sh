@@ -9,8 +9,9 @@
 # fuzz/corpus.full/<target>/ (ignored by git). Needs the targets built (`fuzz/run.sh` builds them).
 set -eu
 cd "$(dirname "$0")"
-targets=${*:-store blob geojson cityjson obj walkable}
+targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq}
 bin=target/$(rustc +nightly -vV | sed -n 's/^host: //p')/release
+export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_odr_violation=0"  # as in run.sh
 for t in $targets; do
     rm -rf "corpus.full/$t" "corpus.min/$t"
     mkdir -p corpus.full "corpus.min/$t"

@@ -277,7 +277,16 @@ mod scene_targets {
     /// ring repair, convex decomposition, solids), then the scene's invariants and its summary.
     /// Returns the number of objects.
     pub fn scene(file_name: &str, data: &[u8]) -> Result<usize, LoadError> {
-        let s = load_bytes(&[(PathBuf::from(file_name), data)], &scene_options())?;
+        scene_with(file_name, data, &scene_options())
+    }
+
+    /// [`scene`] with other reader options.
+    pub fn scene_with(
+        file_name: &str,
+        data: &[u8],
+        opts: &ReadOptions,
+    ) -> Result<usize, LoadError> {
+        let s = load_bytes(&[(PathBuf::from(file_name), data)], opts)?;
         for (i, o) in s.objects.iter().enumerate() {
             assert_eq!(o.index as usize, i, "object indices follow input order");
             let b = o.bbox;
@@ -327,6 +336,41 @@ mod scene_targets {
     /// Fuzz target `obj`: [`scene`] as `fuzz.obj`.
     pub fn obj(data: &[u8]) -> Result<usize, LoadError> {
         scene("fuzz.obj", data)
+    }
+
+    /// Fuzz target `osm`: [`scene`] as `fuzz.osm.pbf` (OpenStreetMap tags give the heights).
+    pub fn osm(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.osm.pbf", data)
+    }
+
+    /// Fuzz target `gpkg`: [`scene`] as `fuzz.gpkg` (a SQLite database from memory).
+    pub fn gpkg(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.gpkg", data)
+    }
+
+    /// Fuzz target `fgb`: [`scene`] as `fuzz.fgb`.
+    pub fn fgb(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.fgb", data)
+    }
+
+    /// Fuzz target `shp`: [`scene_with`] as `fuzz.shp`, alone (no `.dbf`, so heights come from a
+    /// default height of 10 m).
+    pub fn shp(data: &[u8]) -> Result<usize, LoadError> {
+        let opts = ReadOptions {
+            default_height: Some(10.0),
+            ..ReadOptions::default()
+        };
+        scene_with("fuzz.shp", data, &opts)
+    }
+
+    /// Fuzz target `citygml`: [`scene`] as `fuzz.gml`.
+    pub fn citygml(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.gml", data)
+    }
+
+    /// Fuzz target `cityjsonseq`: [`scene`] as `fuzz.city.jsonl`.
+    pub fn cityjsonseq(data: &[u8]) -> Result<usize, LoadError> {
+        scene("fuzz.city.jsonl", data)
     }
 
     /// World origin the walkable target subtracts (Lyon's, as the seeds are from Lyon).

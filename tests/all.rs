@@ -17,6 +17,7 @@ mod fuzz_corpus;
 mod hostile_inputs;
 mod incremental;
 mod mesh_datasets;
+mod readers;
 mod stability;
 mod truth;
 mod umbra_cases;
@@ -52,7 +53,7 @@ fn every_test_file_runs() {
             missing.push(name.to_string());
         }
     }
-    assert!(files >= 16, "only {files} test files found in tests/");
+    assert!(files >= 17, "only {files} test files found in tests/");
     assert!(
         missing.is_empty(),
         "tests/{missing:?} would not run: add `mod NAME;` to tests/all.rs (or a [[test]] to Cargo.toml)"

@@ -1429,7 +1429,11 @@ fn messages_blame_the_height_print_1e300_short_and_ask_for_height_attr() {
     );
     let (rc, err) = run(&["info", &tall, "--height-attr", "height"]);
     assert_eq!(rc, Some(1));
-    assert!(err.contains("height = 1e9 m is out of range"), "{err}");
+    // Issue 33, defect 7: a height beyond 1,000 m is a bad height; here the only one.
+    assert!(
+        err.contains("feature 0: \"height\" is 1e9 m, beyond the 1000 m a height may have"),
+        "{err}"
+    );
     assert!(!err.contains("coordinate"), "{err}");
     let (rc, err) = run(&["info", &far, "--height-attr", "height"]);
     assert_eq!(rc, Some(1));
@@ -1626,4 +1630,37 @@ fn render_draws_mesh_walls_and_skipped_objects() {
     assert_eq!(walls.len(), 1, "{text}");
     assert_eq!(walls[0].split('"').next().unwrap().matches('M').count(), 2);
     assert!(!walls[0].split('"').next().unwrap().contains('Z'));
+}
+
+/// Issue 33, defect 1: `info` reports the CRS of every input and of the scene, and the notes of
+/// the load (many buildings without a height, flags no input uses); `bake` prints the notes.
+#[test]
+fn info_reports_each_files_crs_the_scenes_and_the_notes() {
+    let pbf = common::repo("data/helsinki/Helsinki.osm.pbf");
+    let pbf = pbf.to_str().unwrap();
+    let out = vocc(&["info", pbf, "--lod", "2"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("(OpenStreetMap PBF, CRS EPSG:4326 (from the file)): 154 objects"),
+        "{text}"
+    );
+    assert!(
+        text.contains("CRS: EPSG:32635 (projected on load from EPSG:4326)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("292 of 500 OpenStreetMap PBF features skipped for want of a height")
+            && text.contains("--default-height M"),
+        "{text}"
+    );
+    assert!(text.contains("note: --lod applies to CityJSON"), "{text}");
+    let out = vocc(&["info", pbf, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["crs_epsg"], 32635);
+    assert_eq!(v["files"][0]["crs"], "EPSG:4326 (from the file)");
 }

@@ -1,6 +1,7 @@
 //! Replays the committed fuzz corpora on stable Rust, as part of `cargo test`.
 //!
-//! Input: every file of `fuzz/corpus/<target>/` for the six targets of `fuzz/` (docs/FUZZING.md).
+//! Input: every file of `fuzz/corpus/<target>/` for the twelve targets of `fuzz/`
+//! (docs/FUZZING.md).
 //! Output: each file goes through the very function its fuzz target calls (`vocc::fuzzing`),
 //! which checks the library's invariants and panics on a violation.
 //! Invariants: no file panics (each runs under `catch_unwind`, and every failure is listed with
@@ -118,6 +119,42 @@ fn cityjson_corpus() {
 fn obj_corpus() {
     let (n, ok) = replay("obj", |b| fuzzing::obj(b).map(drop));
     assert!(ok > 0, "none of {n} OBJ files loaded");
+}
+
+#[test]
+fn osm_corpus() {
+    let (n, ok) = replay("osm", |b| fuzzing::osm(b).map(drop));
+    assert!(ok > 0, "none of {n} OpenStreetMap files loaded");
+}
+
+#[test]
+fn gpkg_corpus() {
+    let (n, ok) = replay("gpkg", |b| fuzzing::gpkg(b).map(drop));
+    assert!(ok > 0, "none of {n} GeoPackage files loaded");
+}
+
+#[test]
+fn fgb_corpus() {
+    let (n, ok) = replay("fgb", |b| fuzzing::fgb(b).map(drop));
+    assert!(ok > 0, "none of {n} FlatGeobuf files loaded");
+}
+
+#[test]
+fn shp_corpus() {
+    let (n, ok) = replay("shp", |b| fuzzing::shp(b).map(drop));
+    assert!(ok > 0, "none of {n} Shapefiles loaded");
+}
+
+#[test]
+fn citygml_corpus() {
+    let (n, ok) = replay("citygml", |b| fuzzing::citygml(b).map(drop));
+    assert!(ok > 0, "none of {n} CityGML files loaded");
+}
+
+#[test]
+fn cityjsonseq_corpus() {
+    let (n, ok) = replay("cityjsonseq", |b| fuzzing::cityjsonseq(b).map(drop));
+    assert!(ok > 0, "none of {n} CityJSONSeq files loaded");
 }
 
 #[test]

@@ -395,11 +395,33 @@ fn geojson_nan_infinite_and_huge_values_are_located_errors() {
         );
         assert_eq!(e.location, Location::Feature(1), "{e}");
     }
-    // 1e300 as a height, as storeys (times 3 m), and a coordinate of 1e300 written with a huge
-    // exponent; the largest finite f64 too.
+    // 1e300 as a height, or as storeys: a bad height (issue 33, defect 7), skipped with its
+    // reason, or under --on-bad-height error a located error; never an abort of the load.
+    for (props, what) in [
+        (r#"{"height":1e300}"#, "height"),
+        (r#"{"height":null,"levels":"1e300"}"#, "levels"),
+    ] {
+        let text = with(props, SQUARE);
+        let s = load_one("a.geojson", &text).unwrap();
+        assert!(
+            matches!(&s.report.skipped[0].1.reason, vocc::scene::SkipReason::BadHeight { attr, value }
+                if attr == what && value.contains("1e300")),
+            "{what}: {:?}",
+            s.report.skipped
+        );
+        let strict = ReadOptions {
+            on_bad_height: vocc::scene::OnBadHeight::Error,
+            ..opts()
+        };
+        let e = load_bytes(&[(PathBuf::from("a.geojson"), text.as_bytes())], &strict).unwrap_err();
+        assert!(
+            matches!(&e.kind, LoadErrorKind::AbsurdHeight { attr, .. } if attr == what),
+            "{what}: {e}"
+        );
+        assert_eq!(e.location, Location::Feature(1), "{e}");
+    }
+    // A coordinate of 1e300 written with a huge exponent; the largest finite f64 too.
     for (props, coords) in [
-        (r#"{"height":1e300}"#, SQUARE),
-        (r#"{"height":null,"levels":"1e300"}"#, SQUARE),
         (
             r#"{"height":5}"#,
             "[[[0,0],[10000000000000000000000e280,0],[10,10],[0,0]]]",

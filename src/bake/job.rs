@@ -299,16 +299,16 @@ impl<'s> BakeJob<'s> {
         &self.plan
     }
 
-    /// The scene section the store records (`docs/FORMAT.md` 5.2): the objects baked for and
-    /// the scene's fingerprint. The CRS name is left empty until `Scene` carries one: it plugs
-    /// in here, as `crs: &scene.crs` (a name over 255 bytes would be refused by the encoder).
-    pub fn scene_section(&self) -> SceneSection<'static> {
+    /// The scene section the store records (`docs/FORMAT.md` 5.2): the objects baked for, the
+    /// scene's fingerprint and its coordinate reference system's name (empty when unknown; cut
+    /// to the section's 255 bytes).
+    pub fn scene_section(&self) -> SceneSection<'_> {
         let scene = self.plan.scene;
         SceneSection {
             // Object indices are `u32`, so the count fits (saturated, never reached).
             objects: u32::try_from(scene.objects.len()).unwrap_or(u32::MAX),
             scene: scene.fingerprint(),
-            crs: "",
+            crs: scene.crs().map_or("", |c| crs_field(&c.name)),
         }
     }
 
@@ -664,4 +664,14 @@ mod tests {
         assert!(matches!(e, JobError::RegionOutsideGrid { .. }), "{e}");
         assert!(e.to_string().contains("meets no cell of the grid"), "{e}");
     }
+}
+
+/// A CRS name as the store's scene section holds it: at most 255 bytes, cut at a character
+/// boundary (a name that long is a description read from a file, whose start names it).
+fn crs_field(name: &str) -> &str {
+    let mut end = name.len().min(255);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    &name[..end]
 }

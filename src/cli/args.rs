@@ -14,34 +14,50 @@ use vocc::scene::{OnBadHeight, ReadOptions};
 /// Options of the scene readers.
 #[derive(Args, Clone, Debug)]
 pub struct ReadArgs {
-    /// GeoJSON: attribute with the building height above its base, metres.
+    /// Footprints (GeoJSON, GeoPackage, FlatGeobuf, Shapefile): attribute with the building
+    /// height above its base, metres.
     #[arg(long, value_name = "NAME")]
     pub height_attr: Option<String>,
-    /// GeoJSON: attribute with the base elevation, metres (default: base at 0).
+    /// Footprints: attribute with the base elevation, metres (default: base at 0).
     #[arg(long, value_name = "NAME")]
     pub base_attr: Option<String>,
-    /// GeoJSON: attribute with the number of storeys, used when the height is missing.
+    /// Footprints: attribute with the number of storeys, used when the height is missing.
     #[arg(long, value_name = "NAME")]
     pub levels_attr: Option<String>,
     /// Metres per storey for --levels-attr.
     #[arg(long, default_value_t = 3.0, value_name = "M", value_parser = parse_positive, allow_hyphen_values = true)]
     pub storey_height: f64,
-    /// CityJSON: level of detail to read (default: the highest each object has).
+    /// CityJSON, CityJSONSeq, CityGML: level of detail to read (default: the highest each
+    /// object has).
     #[arg(long)]
     pub lod: Option<String>,
-    /// GeoJSON: a height, storey or base value that is not a number ("12.13 m" and "12,5" are
-    /// numbers; "tall" is not): `skip` tries the storey count, then --default-height, and
-    /// otherwise skips the feature, counted with its reason; `error` stops the load there.
+    /// Footprints and OpenStreetMap: a height, storey or base value that is not a number
+    /// ("12.13 m" and "12,5" are numbers; "tall" is not) or beyond 1,000 m (a base beyond
+    /// 10,000 m): `skip` tries the storey count, then --default-height, and otherwise skips the
+    /// feature, counted with its reason; `error` stops the load there.
     #[arg(long, value_enum, default_value_t = OnBadHeightArg::Skip, value_name = "skip|error")]
     pub on_bad_height: OnBadHeightArg,
-    /// GeoJSON: height of a feature with no usable height or storey count, metres (the last
-    /// fallback; default: such features are skipped).
+    /// Footprints and OpenStreetMap: height of a feature with no usable height or storey
+    /// count, metres (the last fallback; default: such features are skipped).
     #[arg(long, value_name = "M", value_parser = parse_positive, allow_hyphen_values = true)]
     pub default_height: Option<f64>,
-    /// CityJSON: also read these city object types, besides Building and BuildingPart
+    /// CityJSON, CityJSONSeq: also read these city object types, besides Building and BuildingPart
     /// (comma-separated, as the file writes them: Bridge,OtherConstruction,+GenericCityObject).
     #[arg(long, value_delimiter = ',', value_name = "TYPE,...")]
     pub types: Vec<String>,
+    /// Footprints: attribute with the height of the bottom above the base, metres (a part
+    /// standing on others; OpenStreetMap's tag is the default, read where present).
+    #[arg(long, value_name = "NAME", default_value = "min_height")]
+    pub min_height_attr: String,
+    /// Footprints: attribute with the storey the bottom starts at, when the bottom's height is
+    /// missing.
+    #[arg(long, value_name = "NAME", default_value = "building:min_level")]
+    pub min_levels_attr: String,
+    /// The metric CRS to project the scene into (EPSG:N). Default: the CRS the input states;
+    /// longitude/latitude input (stated, or detected: every coordinate within range) goes to the
+    /// UTM zone of its centre.
+    #[arg(long, value_name = "EPSG:N")]
+    pub crs: Option<String>,
 }
 
 /// `--on-bad-height`.
@@ -65,6 +81,9 @@ impl ReadArgs {
             },
             default_height: self.default_height,
             types: self.types.iter().map(|t| t.trim().to_string()).collect(),
+            min_height_attr: Some(self.min_height_attr.clone()).filter(|s| !s.is_empty()),
+            min_levels_attr: Some(self.min_levels_attr.clone()).filter(|s| !s.is_empty()),
+            crs: self.crs.clone(),
         }
     }
 }

@@ -30,7 +30,9 @@ use crate::progress::Progress;
   vocc bake city-v2.geojson --height-attr height --reuse city-v1.vocc -o city-v2.vocc --json
   vocc bake city.geojson --height-attr height --shard auto --shard-count 16 -o shard.vocc")]
 pub struct BakeArgs {
-    /// Scene files: GeoJSON footprints, CityJSON (0.8, 1.x, 2.0) or OBJ.
+    /// Scene files: GeoJSON, GeoPackage, FlatGeobuf or Shapefile footprints, OpenStreetMap PBF,
+    /// CityJSON (0.3 to 0.9, 1.0, 1.1, 2.0), CityJSONSeq, CityGML 2.0, or OBJ (README, "What goes
+    /// in").
     #[arg(required = true)]
     pub scene: Vec<PathBuf>,
     #[command(flatten)]
@@ -150,6 +152,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
         None => None,
     };
     let s = scene::load(&a.scene, &a.read.options())?;
+    for n in &s.report.notes {
+        eprintln!("note: {n}");
+    }
     let load_s = t0.elapsed().as_secs_f64();
     let region = a.region.map(|[x0, y0, x1, y1]| {
         [

@@ -31,8 +31,12 @@ fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<
     for f in &s.files {
         write!(
             out,
-            "file {} ({}): {} objects, {} skipped",
-            f.path, f.format, f.objects, f.skipped
+            "file {} ({}, CRS {}): {} objects, {} skipped",
+            f.path,
+            f.format,
+            f.crs.as_deref().unwrap_or("not stated"),
+            f.objects,
+            f.skipped
         )?;
         if !f.other_types.is_empty() {
             let o: Vec<String> = f
@@ -43,6 +47,14 @@ fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<
             write!(out, "; other city objects not read: {}", o.join(", "))?;
         }
         writeln!(out)?;
+    }
+    writeln!(
+        out,
+        "CRS: {}",
+        s.crs.as_deref().unwrap_or("unknown (no input states one)")
+    )?;
+    for n in &s.notes {
+        writeln!(out, "note: {n}")?;
     }
     writeln!(
         out,

@@ -94,7 +94,9 @@ enum Command {
     },
     /// Load scene files and report objects, blockers, convex pieces, repairs and timings.
     Info {
-        /// Scene files: GeoJSON footprints, CityJSON (0.8, 1.x, 2.0) or OBJ.
+        /// Scene files: GeoJSON, GeoPackage, FlatGeobuf or Shapefile footprints, OpenStreetMap PBF,
+        /// CityJSON (0.3 to 0.9, 1.0, 1.1, 2.0), CityJSONSeq, CityGML 2.0, or OBJ (README, "What goes
+        /// in").
         #[arg(required = true)]
         scene: Vec<PathBuf>,
         #[command(flatten)]

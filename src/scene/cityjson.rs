@@ -141,6 +141,7 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
     let wanted_lod = opts.lod.as_deref();
     let mut out = FileRead {
         items: city_objects.len(),
+        crs: reference_system(v),
         ..FileRead::default()
     };
     for (item, (id, obj)) in city_objects.iter().enumerate() {
@@ -272,6 +273,12 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
         });
     }
     Ok(out)
+}
+
+/// The CRS in `metadata.referenceSystem` (a URN or URL with an EPSG code), or `None`.
+pub fn reference_system(v: &Value) -> Option<super::Crs> {
+    let rs = v.get("metadata")?.get("referenceSystem")?.as_str()?;
+    Some(super::Crs::parse(rs))
 }
 
 /// The versions this reader knows, as `MAJOR.MINOR` with an optional patch number: 0.3 to 0.9

@@ -20,6 +20,11 @@ pub enum Location {
     CityObject(String),
     /// A vertex, 0-based as in the file's vertex list.
     Vertex(usize),
+    /// A named element: an OpenStreetMap `way 123` or `relation 45`, a GeoPackage table row.
+    Element(String),
+    /// A place inside one line of a line-delimited file (CityJSONSeq): the 1-based line, then
+    /// the place within that line's document.
+    InLine { line: usize, inner: Box<Location> },
 }
 
 impl fmt::Display for Location {
@@ -34,6 +39,11 @@ impl fmt::Display for Location {
             Location::Feature(i) => write!(f, "feature {i}"),
             Location::CityObject(id) => write!(f, "city object {id:?}"),
             Location::Vertex(i) => write!(f, "vertex {i}"),
+            Location::Element(e) => f.write_str(e),
+            Location::InLine { line, inner } => match **inner {
+                Location::File => write!(f, "line {line}"),
+                ref i => write!(f, "line {line}, {i}"),
+            },
         }
     }
 }
@@ -45,8 +55,32 @@ pub enum LoadErrorKind {
     Io(String),
     #[error("the file is empty")]
     Empty,
-    #[error("unknown file format (expected .geojson/.json GeoJSON, .json CityJSON or .obj)")]
+    #[error("unknown file format (vocc reads .geojson/.json GeoJSON, .json/.city.json CityJSON, .city.jsonl/.jsonl CityJSONSeq, .gml/.xml CityGML 2.0, .osm.pbf OpenStreetMap, .gpkg GeoPackage, .fgb FlatGeobuf, .shp Shapefile and .obj)")]
     UnknownFormat,
+    /// A format vocc does not read, with a tool that converts it to one it does.
+    #[error("{format} files are not read by vocc; convert it first, e.g. {hint}")]
+    UnsupportedFormat { format: String, hint: String },
+    /// The same file given twice (compared as files, not names).
+    #[error("the same file as input {} is given again; give each file once (its objects would be doubled)", first.display())]
+    DuplicateFile { first: PathBuf },
+    /// Two inputs in CRSs that cannot be put into one.
+    #[error("inputs in two coordinate reference systems: {} is in {}, {} is in {}; {}", .0.a_file.display(), .0.a_crs, .0.b_file.display(), .0.b_crs, .0.why)]
+    MixedCrs(Box<CrsConflict>),
+    /// A point could not be projected, or `--crs` names no projected CRS: `what` says from and
+    /// to what (`EPSG:4326 to EPSG:32631`).
+    #[error("cannot project {what}: {message}")]
+    Projection { what: String, message: String },
+    /// A height or base that is a number, but beyond what any building has.
+    #[error("attribute {attr:?} has value {} m, beyond the {limit} m a {what} may have; --on-bad-height skip passes over such values", short(*value))]
+    AbsurdHeight {
+        attr: String,
+        what: &'static str,
+        value: f64,
+        limit: f64,
+    },
+    /// A companion file a format needs is missing (a Shapefile's `.dbf` for its attributes).
+    #[error("{} is missing; {why}", path.display())]
+    MissingCompanion { path: PathBuf, why: String },
     #[error("malformed JSON: {0}")]
     MalformedJson(String),
     #[error("malformed OBJ: {0}")]
@@ -67,7 +101,9 @@ pub enum LoadErrorKind {
     },
     #[error("unknown geometry type {0:?}")]
     UnknownGeometryType(String),
-    #[error("attribute {attr:?} is missing from every feature; {hint}")]
+    #[error(
+        "attribute {attr:?} gives no feature a height (missing, or not usable, everywhere); {hint}"
+    )]
     MissingAttribute { attr: String, hint: String },
     /// GeoJSON footprints carry no height, and no attribute to read one from was named.
     #[error("GeoJSON footprints need a height: give --height-attr NAME (or --levels-attr NAME for storey counts)")]
@@ -102,6 +138,16 @@ fn types_hint(held: &[(String, usize)]) -> String {
     } else {
         format!("; read them with --types {}", t.join(","))
     }
+}
+
+/// Two inputs whose CRSs cannot be put into one: each file and its CRS, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CrsConflict {
+    pub a_file: PathBuf,
+    pub a_crs: String,
+    pub b_file: PathBuf,
+    pub b_crs: String,
+    pub why: String,
 }
 
 /// A reader error: the file, the place in it, and what is wrong.

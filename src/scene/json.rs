@@ -19,7 +19,7 @@ use serde_json::{Map, Value};
 use super::cityjson;
 use super::error::{LoadError, LoadErrorKind, Location};
 use super::geojson::{FeatureIn, GeoJsonReader};
-use super::{FileRead, ReadOptions};
+use super::{Crs, FileRead, ReadOptions};
 
 /// Reads a JSON scene document: GeoJSON or CityJSON.
 pub fn read_json(
@@ -44,9 +44,10 @@ pub fn read_json(
     }
     let mut rest = parsed.map_err(|e| json_error(path, e, *state.feature.borrow()))?;
     let kind = rest.get("type").and_then(Value::as_str).map(str::to_string);
+    let crs = geojson_crs(rest.get("crs"));
     match kind.as_deref() {
         Some("FeatureCollection") => {
-            let reader = match state.geojson.into_inner() {
+            let mut reader = match state.geojson.into_inner() {
                 Some(r) => r,
                 None => {
                     return Err(LoadError::new(
@@ -59,6 +60,7 @@ pub fn read_json(
                     ))
                 }
             };
+            reader.set_crs(crs);
             Ok((reader.finish()?, "GeoJSON"))
         }
         Some("Feature") => {
@@ -81,6 +83,7 @@ pub fn read_json(
                 },
             };
             reader.feature(f)?;
+            reader.set_crs(crs);
             Ok((reader.finish()?, "GeoJSON"))
         }
         Some("CityJSON") => Ok((
@@ -99,6 +102,143 @@ pub fn read_json(
             },
         )),
     }
+}
+
+/// Whether `bytes` are a CityJSONSeq (CityJSON Text Sequence): a first line that is a whole
+/// CityJSON object (the header), and more lines after it.
+pub fn is_cityjson_seq(bytes: &[u8]) -> bool {
+    let mut lines = bytes
+        .split(|&b| b == b'\n')
+        .filter(|l| !l.iter().all(u8::is_ascii_whitespace));
+    let Some(first) = lines.next() else {
+        return false;
+    };
+    // Cheap tests first: a one-line GeoJSON of 10^6 features is never parsed twice.
+    let has = |l: &[u8], w: &[u8]| l.windows(w.len()).any(|x| x == w);
+    let Some(second) = lines.next() else {
+        return false;
+    };
+    has(second, b"\"CityJSONFeature\"")
+        && serde_json::from_slice::<Value>(first)
+            .ok()
+            .is_some_and(|v| v.get("type").and_then(Value::as_str) == Some("CityJSON"))
+}
+
+/// Reads a CityJSONSeq (`.city.jsonl`): line 1 a CityJSON header (version, `transform`,
+/// `metadata`; its `vertices` and `CityObjects` empty), then one `CityJSONFeature` per line (its
+/// `CityObjects` and its own `vertices`, indexed from 0, under the header's `transform`). Each
+/// feature is read as a CityJSON document of its own by [`cityjson::read_cityjson`]; items are
+/// numbered across the file in order. Errors name the line, then the place within it.
+pub fn read_cityjson_seq(
+    path: &Path,
+    bytes: &[u8],
+    opts: &ReadOptions,
+) -> Result<FileRead, LoadError> {
+    let malformed = |line: usize, message: String| {
+        LoadError::new(
+            path,
+            Location::Line { line, column: None },
+            LoadErrorKind::Malformed {
+                format: "CityJSONSeq",
+                message,
+            },
+        )
+    };
+    let mut out = FileRead::default();
+    let mut header: Option<Map<String, Value>> = None;
+    for (k, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let ln = k + 1;
+        if line.iter().all(u8::is_ascii_whitespace) {
+            continue;
+        }
+        let v: Value = serde_json::from_slice(line).map_err(|e| {
+            LoadError::new(
+                path,
+                Location::Line {
+                    line: ln,
+                    column: Some(e.column()),
+                },
+                LoadErrorKind::MalformedJson(e.to_string()),
+            )
+        })?;
+        let Value::Object(mut m) = v else {
+            return Err(malformed(ln, "a line is not a JSON object".into()));
+        };
+        let ty = m
+            .get("type")
+            .and_then(Value::as_str)
+            .unwrap_or("")
+            .to_string();
+        let Some(h) = &header else {
+            if ty != "CityJSON" {
+                return Err(malformed(
+                    ln,
+                    format!("the first line must be the CityJSON header (\"type\": \"CityJSON\"), not {ty:?}"),
+                ));
+            }
+            out.crs = cityjson::reference_system(&Value::Object(m.clone()));
+            header = Some(m);
+            continue;
+        };
+        if ty != "CityJSONFeature" {
+            return Err(malformed(
+                ln,
+                format!("a line after the header must be a \"CityJSONFeature\", not {ty:?}"),
+            ));
+        }
+        let mut doc = h.clone();
+        doc.insert(
+            "CityObjects".into(),
+            m.remove("CityObjects").unwrap_or(Value::Null),
+        );
+        doc.insert(
+            "vertices".into(),
+            m.remove("vertices").unwrap_or(Value::Null),
+        );
+        let r =
+            cityjson::read_cityjson(path, &Value::Object(doc), opts).map_err(|e| LoadError {
+                location: Location::InLine {
+                    line: ln,
+                    inner: Box::new(e.location),
+                },
+                ..e
+            })?;
+        let offset = out.items as u32;
+        out.objects.extend(r.objects.into_iter().map(|mut o| {
+            o.feature += offset;
+            o
+        }));
+        out.skipped.extend(r.skipped.into_iter().map(|mut s| {
+            s.feature += offset;
+            s
+        }));
+        for (t, n) in r.other_types {
+            *out.other_types.entry(t).or_default() += n;
+        }
+        out.lods.extend(r.lods);
+        out.items += r.items;
+    }
+    if header.is_none() {
+        return Err(malformed(1, "no CityJSON header line".into()));
+    }
+    Ok(out)
+}
+
+/// The CRS of a GeoJSON `crs` member (the 2008 specification's): `{"type": "name",
+/// "properties": {"name": URN}}`, or `{"type": "EPSG", "properties": {"code": N}}`. RFC 7946
+/// dropped the member (its coordinates are WGS84 longitude/latitude); `None` when there is none.
+fn geojson_crs(v: Option<&Value>) -> Option<Crs> {
+    let props = v?.get("properties")?;
+    if let Some(name) = props.get("name").and_then(Value::as_str) {
+        return Some(Crs::parse(name));
+    }
+    let code = props.get("code")?;
+    let code = code
+        .as_u64()
+        .or_else(|| code.as_str().and_then(|s| s.trim().parse().ok()))?;
+    u32::try_from(code)
+        .ok()
+        .map(|c| Crs::from_epsg(c, crate::scene::CrsSource::File))
 }
 
 /// Maps a serde_json error to a located load error: syntax errors are malformed JSON; data errors

@@ -2,9 +2,17 @@
 //!
 //! Input: file paths in order (or `(path, bytes)` pairs already in memory: [`load_bytes`]), and
 //! reader options. Output: a [`Scene`].
-//! Stages, each timed: read (format detection and parsing), localize (one origin for the whole
-//! scene: the bounding-box minimum rounded down to 1 km, then subtraction in f64), footprints
-//! (ring repair and convex decomposition), meshes (solid extraction).
+//! Stages, each timed: read (format detection and parsing), localize (the CRS of each file and
+//! of the scene, projection of input in another CRS or in longitude/latitude ([`super::crs`]),
+//! then one origin for the whole scene: the bounding-box minimum rounded down to 1 km, then
+//! subtraction in f64), footprints (ring repair and convex decomposition), meshes (solid
+//! extraction).
+//! Formats, by extension (then content): `.geojson`, `.json` (GeoJSON, CityJSON, or CityJSONSeq
+//! when its first line is a CityJSON header), `.city.jsonl`/`.jsonl` (CityJSONSeq), `.gml`/`.xml`
+//! (CityGML 2.0), `.osm.pbf`/`.pbf` (OpenStreetMap), `.gpkg` (GeoPackage), `.fgb` (FlatGeobuf),
+//! `.shp` (Shapefile, with the `.dbf` and `.prj` beside it), `.obj`. Formats vocc does not read
+//! (`.dxf`, `.kml`, `.ifc`, `.las`, ...) are refused with a tool that converts them.
+//! The same file given twice is refused; reader flags no input uses are noted in the report.
 //! Invariants: object indices follow input order; a failed file fails the whole load (no partial
 //! scene); per-object work runs in parallel but results are collected in index order, so the
 //! scene is identical for any thread count.
@@ -15,10 +23,12 @@ use std::time::Instant;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use super::error::{LoadError, LoadErrorKind, Location};
+use super::crs::{self, Crs, CrsSource, Projector};
+use super::error::{check_coord, CrsConflict, LoadError, LoadErrorKind, Location};
 use super::{
-    decompose, footprint, json, obj, solid, walls, Aabb3, Blocker, FileRead, FileStats, Footprint,
-    NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene, SceneReport, Shape,
+    citygml, decompose, fgb, footprint, gpkg, json, obj, osm, shp, solid, walls, Aabb3, Blocker,
+    FileRead, FileStats, Footprint, NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene,
+    SceneReport, Shape, SkipReason,
 };
 
 /// Size of the grid the scene origin snaps to, metres.
@@ -26,9 +36,103 @@ pub const ORIGIN_SNAP_M: f64 = 1000.0;
 
 /// Reads one file, choosing the reader from its extension and content.
 pub fn read_file(path: &Path, opts: &ReadOptions) -> Result<(FileRead, &'static str), LoadError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| LoadError::new(path, Location::File, LoadErrorKind::Io(e.to_string())))?;
+    let io = |p: &Path, e: std::io::Error| {
+        LoadError::new(p, Location::File, LoadErrorKind::Io(e.to_string()))
+    };
+    // Refuse what vocc cannot read before reading it (a point cloud may be large).
+    if let Some(e) = unsupported(path) {
+        return Err(e);
+    }
+    let bytes = std::fs::read(path).map_err(|e| io(path, e))?;
+    if extension(path) == "shp" && !bytes.iter().all(|b| b.is_ascii_whitespace()) {
+        // A Shapefile's attributes and CRS are in the files beside it.
+        let dbf = sibling(path, "dbf");
+        let dbf = match dbf {
+            Some(p) => Some(std::fs::read(&p).map_err(|e| io(&p, e))?),
+            None => None,
+        };
+        let prj = match sibling(path, "prj") {
+            Some(p) => Some(std::fs::read(&p).map_err(|e| io(&p, e))?),
+            None => None,
+        };
+        return Ok((
+            shp::read_shp(path, &bytes, dbf.as_deref(), prj.as_deref(), opts)?,
+            "Shapefile",
+        ));
+    }
     read_bytes(path, &bytes, opts)
+}
+
+/// The file beside `path` with extension `ext` (either case), if it exists.
+fn sibling(path: &Path, ext: &str) -> Option<PathBuf> {
+    [ext.to_string(), ext.to_ascii_uppercase()]
+        .into_iter()
+        .map(|e| path.with_extension(e))
+        .find(|p| p.is_file())
+}
+
+/// The lower-case extension of a path (`pbf` for `x.osm.pbf`).
+fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Formats vocc does not read, with a conversion to one it does.
+fn unsupported(path: &Path) -> Option<LoadError> {
+    let ext = extension(path);
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "in".into());
+    let (format, hint) = match ext.as_str() {
+        "dxf" | "dwg" => (
+            "CAD (DXF/DWG)",
+            format!("ogr2ogr -f GeoJSON {stem}.geojson {} (DXF; DWG through ODA File Converter to DXF first), or export an OBJ from the CAD program", path.display()),
+        ),
+        "kml" | "kmz" => (
+            "KML",
+            format!("ogr2ogr -f GeoJSON {stem}.geojson {} (longitude/latitude, projected by vocc on load)", path.display()),
+        ),
+        "ifc" => (
+            "IFC",
+            format!("IfcConvert {} {stem}.obj (IfcOpenShell), or ifc2citygml", path.display()),
+        ),
+        "las" | "laz" | "e57" | "ply" | "xyz" => (
+            "point cloud",
+            "derive footprints with heights or LoD2 models first (3dfier, geoflow / 3DBAG's pipeline), then give the GeoJSON, CityJSON or OBJ".to_string(),
+        ),
+        "osm" | "o5m" => (
+            "OpenStreetMap XML",
+            format!("osmium cat {} -o {stem}.osm.pbf", path.display()),
+        ),
+        "gltf" | "glb" | "fbx" | "dae" | "3ds" | "stl" | "3dm" | "skp" | "b3dm" => (
+            "mesh",
+            format!("assimp export {} {stem}.obj (or Blender: export as OBJ)", path.display()),
+        ),
+        "dbf" | "shx" | "prj" | "cpg" => (
+            "Shapefile part",
+            format!("give the .shp: {}", path.with_extension("shp").display()),
+        ),
+        "tif" | "tiff" | "asc" => (
+            "raster",
+            "vocc reads buildings, not terrain rasters; give the buildings (GeoJSON, CityJSON, OBJ, ...)".to_string(),
+        ),
+        "tab" | "mif" | "sqlite" | "gdb" | "zip" => (
+            "GIS table",
+            format!("ogr2ogr -f GPKG {stem}.gpkg {} (or -f GeoJSON)", path.display()),
+        ),
+        _ => return None,
+    };
+    Some(LoadError::new(
+        path,
+        Location::File,
+        LoadErrorKind::UnsupportedFormat {
+            format: format.to_string(),
+            hint,
+        },
+    ))
 }
 
 /// Reads one file's bytes, choosing the reader from the extension of `path` and the content;
@@ -42,33 +146,58 @@ pub fn read_bytes(
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(err(Location::File, LoadErrorKind::Empty));
     }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    if ext == "obj" {
-        return Ok((obj::read_obj(path, bytes, opts)?, "OBJ"));
+    let ext = extension(path);
+    match ext.as_str() {
+        "obj" => return Ok((obj::read_obj(path, bytes, opts)?, "OBJ")),
+        "pbf" => return Ok((osm::read_pbf(path, bytes, opts)?, "OpenStreetMap PBF")),
+        "gpkg" => return Ok((gpkg::read_gpkg(path, bytes, opts)?, "GeoPackage")),
+        "fgb" => return Ok((fgb::read_fgb(path, bytes, opts)?, "FlatGeobuf")),
+        "shp" => return Ok((shp::read_shp(path, bytes, None, None, opts)?, "Shapefile")),
+        "gml" | "xml" => return Ok((citygml::read_citygml(path, bytes, opts)?, "CityGML")),
+        "jsonl" => return Ok((json::read_cityjson_seq(path, bytes, opts)?, "CityJSONSeq")),
+        "json" | "geojson" | "cityjson" => {}
+        _ => {
+            if let Some(e) = unsupported(path) {
+                return Err(e);
+            }
+            return Err(err(Location::File, LoadErrorKind::UnknownFormat));
+        }
     }
-    if !matches!(ext.as_str(), "json" | "geojson" | "cityjson") {
-        return Err(err(Location::File, LoadErrorKind::UnknownFormat));
+    if json::is_cityjson_seq(bytes) {
+        return Ok((json::read_cityjson_seq(path, bytes, opts)?, "CityJSONSeq"));
     }
     json::read_json(path, bytes, opts)
+}
+
+/// Refuses a file given twice: `keys` identify the files (canonical paths).
+fn refuse_duplicates(paths: &[PathBuf], keys: &[PathBuf]) -> Result<(), LoadError> {
+    for (i, k) in keys.iter().enumerate() {
+        if let Some(j) = keys[..i].iter().position(|o| o == k) {
+            return Err(LoadError::new(
+                &paths[i],
+                Location::File,
+                LoadErrorKind::DuplicateFile {
+                    first: paths[j].clone(),
+                },
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Loads files into one scene.
 pub fn load(paths: &[PathBuf], opts: &ReadOptions) -> Result<Scene, LoadError> {
     let t = Instant::now();
+    let keys: Vec<PathBuf> = paths
+        .iter()
+        .map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone()))
+        .collect();
+    refuse_duplicates(paths, &keys)?;
     let reads: Vec<(FileRead, &'static str)> = paths
         .par_iter()
         .map(|p| read_file(p, opts))
         .collect::<Result<_, _>>()?;
-    build_scene(
-        paths.to_vec(),
-        reads,
-        t.elapsed().as_secs_f64(),
-        &opts.types,
-    )
+    build_scene(paths.to_vec(), reads, t.elapsed().as_secs_f64(), opts)
 }
 
 /// [`load`] from bytes already in memory: `(path, bytes)` per file, in order. Each path chooses
@@ -77,12 +206,14 @@ pub fn load(paths: &[PathBuf], opts: &ReadOptions) -> Result<Scene, LoadError> {
 /// decomposition, solid extraction).
 pub fn load_bytes(files: &[(PathBuf, &[u8])], opts: &ReadOptions) -> Result<Scene, LoadError> {
     let t = Instant::now();
+    let names: Vec<PathBuf> = files.iter().map(|(p, _)| p.clone()).collect();
+    refuse_duplicates(&names, &names)?;
     let reads: Vec<(FileRead, &'static str)> = files
         .par_iter()
         .map(|(p, b)| read_bytes(p, b, opts))
         .collect::<Result<_, _>>()?;
     let paths = files.iter().map(|(p, _)| p.clone()).collect();
-    build_scene(paths, reads, t.elapsed().as_secs_f64(), &opts.types)
+    build_scene(paths, reads, t.elapsed().as_secs_f64(), opts)
 }
 
 /// Everything after reading: the local frame, then per-object repair, decomposition and solids.
@@ -90,12 +221,16 @@ fn build_scene(
     paths: Vec<PathBuf>,
     reads: Vec<(FileRead, &'static str)>,
     read_secs: f64,
-    types: &[String],
+    opts: &ReadOptions,
 ) -> Result<Scene, LoadError> {
+    let types = &opts.types;
     let mut report = SceneReport::default();
     report.timings.push(("read", read_secs));
 
     let t = Instant::now();
+    let mut reads = reads;
+    let (scene_crs, file_crs) = resolve_crs(&paths, &mut reads, opts)?;
+    report.notes = notes(&paths, &reads, opts);
     let mut raw: Vec<(u32, RawObject)> = Vec::new();
     let mut lods = std::collections::BTreeSet::new();
     // Input feature numbers: each file's items follow the previous files'.
@@ -115,6 +250,7 @@ fn build_scene(
             objects: read.objects.len(),
             skipped: read.skipped.len(),
             other_types: read.other_types,
+            crs: file_crs[fi].clone(),
         });
         report
             .skipped
@@ -208,7 +344,285 @@ fn build_scene(
         objects,
         blockers,
         report,
+        crs: scene_crs,
     })
+}
+
+/// The CRS of each file (stated or detected) and of the scene, with every object projected into
+/// the scene's CRS: the rules of [`super::crs`].
+fn resolve_crs(
+    paths: &[PathBuf],
+    reads: &mut [(FileRead, &'static str)],
+    opts: &ReadOptions,
+) -> Result<(Option<Crs>, Vec<Option<Crs>>), LoadError> {
+    let first = paths.first().cloned().unwrap_or_default();
+    // Each file's CRS: stated, else longitude/latitude by detection (footprints only).
+    let file_crs: Vec<Option<Crs>> = reads
+        .iter()
+        .map(|(r, _)| {
+            r.crs.clone().or_else(|| {
+                let all_footprints = !r.objects.is_empty()
+                    && r.objects
+                        .iter()
+                        .all(|o| matches!(o.shape, Shape::Footprint(_)));
+                let pts = r.objects.iter().filter_map(|o| match &o.shape {
+                    Shape::Footprint(fp) => Some(fp.polygons.iter().flatten().flatten().copied()),
+                    Shape::Mesh(_) => None,
+                });
+                (all_footprints && crs::looks_geographic(pts))
+                    .then(|| Crs::wgs84(CrsSource::Detected))
+            })
+        })
+        .collect();
+    let requested = match &opts.crs {
+        None => None,
+        Some(text) => {
+            let c = Crs::parse(text);
+            let ok = c
+                .epsg
+                .is_some_and(|e| crs::epsg_is_geographic(e) == Some(false));
+            if !ok {
+                return Err(LoadError::new(
+                    &first,
+                    Location::File,
+                    LoadErrorKind::Projection {
+                        what: format!("the input to {text}"),
+                        message: "--crs takes a projected (metric) CRS known by its EPSG code, e.g. EPSG:32631".into(),
+                    },
+                ));
+            }
+            Some(Crs {
+                source: CrsSource::Requested,
+                ..c
+            })
+        }
+    };
+    let projected = file_crs
+        .iter()
+        .enumerate()
+        .find_map(|(i, c)| c.as_ref().filter(|c| !c.geographic).map(|c| (i, c.clone())));
+    let geographic = file_crs
+        .iter()
+        .enumerate()
+        .find_map(|(i, c)| c.as_ref().filter(|c| c.geographic).map(|c| (i, c.clone())));
+    // The scene's CRS, and where it came from (a file index; None: requested or UTM).
+    let (mut target, target_file) = match (requested, projected, &geographic) {
+        (Some(r), _, _) => (r, None),
+        (None, Some((i, c)), _) => (c, Some(i)),
+        (None, None, Some(_)) => {
+            // The UTM zone of the centre of the geographic input.
+            let mut b = Aabb3::EMPTY;
+            for (fi, (r, _)) in reads.iter().enumerate() {
+                if file_crs[fi].as_ref().is_some_and(|c| c.geographic) {
+                    for o in &r.objects {
+                        b = b.union(shape_bbox(&o.shape));
+                    }
+                }
+            }
+            let (lon, lat) = if b.is_empty() {
+                (0.0, 0.0)
+            } else {
+                (0.5 * (b.min.x + b.max.x), 0.5 * (b.min.y + b.max.y))
+            };
+            let mut c = Crs::from_epsg(crs::utm_epsg(lon, lat), CrsSource::Projected);
+            c.geographic = false;
+            (c, None)
+        }
+        (None, None, None) => return Ok((None, file_crs)),
+    };
+    let target_name = |t: &Crs| match target_file {
+        Some(i) => (paths[i].clone(), t.name.clone()),
+        None if t.source == CrsSource::Requested => ("--crs".into(), t.name.clone()),
+        None => (
+            paths[geographic.as_ref().map(|g| g.0).unwrap_or(0)].clone(),
+            format!(
+                "{} (projected to {})",
+                geographic
+                    .as_ref()
+                    .map(|g| g.1.name.clone())
+                    .unwrap_or_default(),
+                t.name
+            ),
+        ),
+    };
+    for (fi, (read, _)) in reads.iter_mut().enumerate() {
+        let Some(c) = &file_crs[fi] else {
+            if target_file.is_none() && target.source != CrsSource::Requested {
+                let (a_file, a_crs) = target_name(&target);
+                return Err(LoadError::new(
+                    &paths[fi],
+                    Location::File,
+                    LoadErrorKind::MixedCrs(Box::new(CrsConflict {
+                        a_file,
+                        a_crs,
+                        b_file: paths[fi].clone(),
+                        b_crs: "no CRS stated".into(),
+                        why: "a file that states no CRS cannot be placed beside longitude/latitude input; give both in one CRS, or state it (--crs for the scene)".into(),
+                    })),
+                ));
+            }
+            continue;
+        };
+        if c.same_as(&target) {
+            continue;
+        }
+        let p = match (c.epsg, target.epsg) {
+            (Some(a), Some(b)) => Projector::new(a, b),
+            _ => Err("a CRS without an EPSG code cannot be projected".to_string()),
+        };
+        let p = p.map_err(|why| {
+            let (a_file, a_crs) = target_name(&target);
+            LoadError::new(
+                &paths[fi],
+                Location::File,
+                LoadErrorKind::MixedCrs(Box::new(CrsConflict {
+                    a_file,
+                    a_crs,
+                    b_file: paths[fi].clone(),
+                    b_crs: c.name.clone(),
+                    why: format!("vocc cannot project one into the other ({why})"),
+                })),
+            )
+        })?;
+        project_read(&paths[fi], read, &p, &c.name, &target.name)?;
+        if !target.projected_from.contains(&c.name) {
+            target.projected_from.push(c.name.clone());
+        }
+    }
+    Ok((Some(target), file_crs))
+}
+
+/// Projects every object (and skipped outline) of one file; coordinates are range-checked again.
+fn project_read(
+    path: &Path,
+    read: &mut FileRead,
+    p: &Projector,
+    from: &str,
+    to: &str,
+) -> Result<(), LoadError> {
+    let fail = |at: &Location, what: String| {
+        LoadError::new(
+            path,
+            at.clone(),
+            LoadErrorKind::Projection {
+                what: format!("{from} to {to}"),
+                message: what,
+            },
+        )
+    };
+    let one = |q: DVec2, at: &Location| -> Result<DVec2, LoadError> {
+        let r = p
+            .project(q)
+            .ok_or_else(|| fail(at, format!("point ({}, {}) has no image", q.x, q.y)))?;
+        check_coord(r.x, "x")
+            .and_then(|_| check_coord(r.y, "y"))
+            .map_err(|k| LoadError::new(path, at.clone(), k))?;
+        Ok(r)
+    };
+    read.objects
+        .par_iter_mut()
+        .try_for_each(|o| -> Result<(), LoadError> {
+            let at = o.location.clone();
+            match &mut o.shape {
+                Shape::Footprint(fp) => {
+                    for q in fp.polygons.iter_mut().flatten().flatten() {
+                        *q = one(*q, &at)?;
+                    }
+                }
+                Shape::Mesh(m) => {
+                    for v in &mut m.vertices {
+                        let r = one(DVec2::new(v.x, v.y), &at)?;
+                        *v = DVec3::new(r.x, r.y, v.z);
+                    }
+                }
+            }
+            Ok(())
+        })?;
+    for s in &mut read.skipped {
+        for q in s.outline.iter_mut().flatten() {
+            *q = p.project(*q).unwrap_or(*q);
+        }
+    }
+    Ok(())
+}
+
+/// Formats whose footprints take the attribute flags.
+const FOOTPRINT_FORMATS: [&str; 4] = ["GeoJSON", "GeoPackage", "FlatGeobuf", "Shapefile"];
+
+/// Notes on the load: many features skipped for want of a height, and reader flags no input
+/// uses (each naming the flag and the files).
+fn notes(paths: &[PathBuf], reads: &[(FileRead, &'static str)], opts: &ReadOptions) -> Vec<String> {
+    let mut notes = Vec::new();
+    for ((r, format), path) in reads.iter().zip(paths) {
+        let no_height = r
+            .skipped
+            .iter()
+            .filter(|s| {
+                matches!(
+                    s.reason,
+                    SkipReason::NoHeight | SkipReason::BadHeight { .. }
+                )
+            })
+            .count();
+        if opts.default_height.is_none()
+            && no_height > 0
+            && (no_height >= 10 || no_height * 10 >= r.items)
+        {
+            let flags = if *format == "OpenStreetMap PBF" {
+                "no height, building:levels or usable value"
+            } else {
+                "no usable height or storey count"
+            };
+            notes.push(format!(
+                "{}: {no_height} of {} {format} features skipped for want of a height ({flags}); --default-height M reads them at M metres",
+                path.display(),
+                r.items
+            ));
+        }
+    }
+    let names = |pred: &dyn Fn(&str) -> bool| -> Vec<String> {
+        reads
+            .iter()
+            .zip(paths)
+            .filter(|((_, f), _)| pred(f))
+            .map(|(_, p)| p.display().to_string())
+            .collect()
+    };
+    let all = names(&|_| true).join(", ");
+    let footprint = !names(&|f| FOOTPRINT_FORMATS.contains(&f)).is_empty();
+    let osm = !names(&|f| f == "OpenStreetMap PBF").is_empty();
+    let lod = !names(&|f| matches!(f, "CityJSON" | "CityJSONSeq" | "CityGML")).is_empty();
+    let types = !names(&|f| matches!(f, "CityJSON" | "CityJSONSeq")).is_empty();
+    let mut unused = |flag: &str, given: bool, used: bool, applies: &str| {
+        if given && !used {
+            notes.push(format!(
+                "{flag} applies to {applies}, and no input is one ({all}): it was not used"
+            ));
+        }
+    };
+    let fp = "GeoJSON, GeoPackage, FlatGeobuf and Shapefile footprints";
+    unused("--height-attr", opts.height_attr.is_some(), footprint, fp);
+    unused("--base-attr", opts.base_attr.is_some(), footprint, fp);
+    unused("--levels-attr", opts.levels_attr.is_some(), footprint, fp);
+    unused(
+        "--default-height",
+        opts.default_height.is_some(),
+        footprint || osm,
+        "footprints and OpenStreetMap buildings",
+    );
+    unused(
+        "--lod",
+        opts.lod.is_some(),
+        lod,
+        "CityJSON, CityJSONSeq and CityGML",
+    );
+    unused(
+        "--types",
+        !opts.types.is_empty(),
+        types,
+        "CityJSON and CityJSONSeq",
+    );
+    notes
 }
 
 struct Built {

@@ -1,6 +1,7 @@
 //! Scenes: readers, the local frame and the 2.5D blocker model.
 //!
-//! Input: city model files (GeoJSON footprints, CityJSON 0.3 to 2.0, OBJ), in the order given.
+//! Input: city model files (GeoJSON, GeoPackage, FlatGeobuf and Shapefile footprints,
+//! OpenStreetMap PBF, CityJSON 0.3 to 2.0 and CityJSONSeq, CityGML 2.0, OBJ), in the order given.
 //! Output: a [`Scene`] in a local frame: every object with its stable index, name, bounding box
 //! and cost, plus the convex 2.5D blockers proven solid, plus a report of what was skipped,
 //! repaired or gave no blocker, and why.
@@ -14,20 +15,27 @@
 //! - nothing here panics on bad input: readers return [`LoadError`].
 
 pub mod attr;
+pub mod citygml;
 pub mod cityjson;
+pub mod crs;
 pub mod decompose;
 pub mod error;
+pub mod fgb;
 pub mod fingerprint;
 pub mod footprint;
 pub mod gencity;
 pub mod geojson;
+pub mod gpkg;
 pub mod json;
 pub mod load;
 pub mod obj;
+pub mod osm;
+pub mod shp;
 pub mod solid;
 pub mod summary;
 pub mod walkable;
 pub mod walls;
+pub mod wkb;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -35,7 +43,8 @@ use std::path::PathBuf;
 
 use glam::{DVec2, DVec3};
 
-pub use error::{LoadError, LoadErrorKind, Location};
+pub use crs::{Crs, CrsSource};
+pub use error::{CrsConflict, LoadError, LoadErrorKind, Location};
 pub use load::{load, load_bytes};
 
 /// Options shared by the readers.
@@ -62,7 +71,24 @@ pub struct ReadOptions {
     /// CityJSON: city object types read besides `Building` and `BuildingPart` (as written in the
     /// file, extension types with their `+`: `Bridge`, `+GenericCityObject`, ...).
     pub types: Vec<String>,
+    /// Footprints: attribute holding the height of the object's bottom above its base, metres
+    /// (OpenStreetMap's `min_height`, the default; read when present).
+    pub min_height_attr: Option<String>,
+    /// Footprints: attribute holding the storey its bottom starts at, the fallback for a missing
+    /// `min_height_attr` (OpenStreetMap's `building:min_level`, the default).
+    pub min_levels_attr: Option<String>,
+    /// The CRS to project the scene into (`EPSG:N`); `None`: the first projected CRS of the
+    /// input, or for longitude/latitude input the UTM zone of its centre ([`crs`]).
+    pub crs: Option<String>,
 }
+
+/// The tallest height a reader accepts, metres: the tallest building stands 828 m. A larger
+/// value (`1e6`, `1e300`) is a bad height, skipped or an error by `--on-bad-height`.
+pub const MAX_HEIGHT_M: f64 = 1000.0;
+
+/// The largest base elevation magnitude a reader accepts, metres (Everest is 8,849 m). A larger
+/// value is a bad base.
+pub const MAX_BASE_M: f64 = 10_000.0;
 
 /// What a GeoJSON height value that is not a number does.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -86,6 +112,9 @@ impl Default for ReadOptions {
             on_bad_height: OnBadHeight::Skip,
             default_height: None,
             types: Vec::new(),
+            min_height_attr: Some("min_height".into()),
+            min_levels_attr: Some("building:min_level".into()),
+            crs: None,
         }
     }
 }
@@ -140,8 +169,9 @@ pub struct RawObject {
 pub enum SkipReason {
     /// No height attribute and no storey count to fall back on.
     NoHeight,
-    /// A height (or storey) value that is not a number, and no fallback: the attribute and the
-    /// value as written.
+    /// A height (or storey) value that is not a number, or a number beyond [`MAX_HEIGHT_M`],
+    /// and no fallback: the attribute, and the value as written with what is wrong with it
+    /// (`"tall", not a number`; `1e300 m, beyond the 1000 m a height may have`).
     BadHeight { attr: String, value: String },
     /// A base attribute was asked for and this object has no value for it.
     NoBase,
@@ -155,16 +185,31 @@ pub enum SkipReason {
     NoGeometryAtLod(String),
     /// A geometry kind this reader does not model (e.g. CityJSON GeometryInstance).
     UnsupportedGeometry(String),
+    /// Part of the geometry is not in the file (an OpenStreetMap way whose nodes lie outside the
+    /// extract, a relation whose member ways do): what is missing.
+    IncompleteGeometry(String),
+}
+
+/// What is wrong with a bad value, for a label without the value.
+fn bad_label(value: &str) -> &'static str {
+    if value.ends_with("not a number") {
+        "not a number"
+    } else {
+        "out of range"
+    }
 }
 
 impl SkipReason {
     /// A short, stable label for grouping in reports (no values).
     pub fn label(&self) -> String {
         match self {
-            SkipReason::BadHeight { attr, .. } => {
-                format!("height attribute {attr:?} not a number")
+            SkipReason::BadHeight { attr, value } => {
+                format!("height attribute {attr:?} {}", bad_label(value))
             }
-            SkipReason::BadBase { attr, .. } => format!("base attribute {attr:?} not a number"),
+            SkipReason::BadBase { attr, value } => {
+                format!("base attribute {attr:?} {}", bad_label(value))
+            }
+            SkipReason::IncompleteGeometry(_) => "geometry not all in the file".into(),
             other => other.to_string(),
         }
     }
@@ -175,16 +220,17 @@ impl fmt::Display for SkipReason {
         match self {
             SkipReason::NoHeight => write!(f, "no height attribute and no storey count"),
             SkipReason::BadHeight { attr, value } => {
-                write!(f, "height attribute {attr:?} is {value}, not a number")
+                write!(f, "height attribute {attr:?} is {value}")
             }
             SkipReason::NoBase => write!(f, "no value for the base attribute"),
             SkipReason::BadBase { attr, value } => {
-                write!(f, "base attribute {attr:?} is {value}, not a number")
+                write!(f, "base attribute {attr:?} is {value}")
             }
             SkipReason::EmptyGeometry => write!(f, "empty or null geometry"),
             SkipReason::NotAreal(t) => write!(f, "geometry type {t} has no area"),
             SkipReason::NoGeometryAtLod(l) => write!(f, "no geometry at LoD {l}"),
             SkipReason::UnsupportedGeometry(t) => write!(f, "unsupported geometry {t}"),
+            SkipReason::IncompleteGeometry(t) => write!(f, "geometry not all in the file: {t}"),
         }
     }
 }
@@ -234,7 +280,7 @@ impl fmt::Display for HeightFallback {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.label())?;
         for (a, v) in &self.passed {
-            write!(f, "; {a:?} is {v}, not a number")?;
+            write!(f, "; {a:?} is {v}")?;
         }
         Ok(())
     }
@@ -254,6 +300,8 @@ pub struct FileRead {
     pub items: usize,
     /// CityJSON: the levels of detail of the geometries of the objects read, as written.
     pub lods: std::collections::BTreeSet<String>,
+    /// The CRS the file states ([`crs`]); `None` when it states none.
+    pub crs: Option<Crs>,
 }
 
 /// An axis-aligned box.
@@ -437,6 +485,8 @@ pub struct FileStats {
     pub objects: usize,
     pub skipped: usize,
     pub other_types: BTreeMap<String, usize>,
+    /// The file's CRS: stated by the file, or detected ([`crs`]); `None`: unknown.
+    pub crs: Option<Crs>,
 }
 
 /// What loading did: per-file counts, and every skip, repair and blocker failure with its reason.
@@ -454,6 +504,10 @@ pub struct SceneReport {
     pub height_fallbacks: Vec<(u32, HeightFallback)>,
     /// Wall-clock seconds per stage, in pipeline order.
     pub timings: Vec<(&'static str, f64)>,
+    /// Warnings about the load as a whole, for `info` and `bake` to print: many features
+    /// skipped for want of a height (with the flag that would read them), reader flags that no
+    /// input uses.
+    pub notes: Vec<String>,
 }
 
 /// A loaded scene in its local frame.
@@ -466,9 +520,20 @@ pub struct Scene {
     /// All blockers, grouped by object in object order.
     pub blockers: Vec<Blocker>,
     pub report: SceneReport,
+    /// The CRS of the world coordinates ([`Scene::crs`]).
+    pub crs: Option<Crs>,
 }
 
 impl Scene {
+    /// The coordinate reference system of the scene's world coordinates (`world = local +
+    /// origin`): the CRS the input states, or the metric CRS longitude/latitude input was
+    /// projected into on load (then [`Crs::projected_from`] names the input's CRSs). `None` when
+    /// no input states a CRS and none was detected. Display it with `{}`; its `name` is
+    /// `EPSG:N` when the code is known.
+    pub fn crs(&self) -> Option<&Crs> {
+        self.crs.as_ref()
+    }
+
     /// Local bounding box of all objects.
     pub fn extent(&self) -> Aabb3 {
         self.objects

@@ -14,6 +14,13 @@ use super::{Location, Scene, Shape};
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
     pub files: Vec<FileSummary>,
+    /// The scene's CRS ([`super::Scene::crs`]), as displayed (`EPSG:32635 (projected on load
+    /// from EPSG:4326)`); `None`: unknown.
+    pub crs: Option<String>,
+    /// Its EPSG code, when known.
+    pub crs_epsg: Option<u32>,
+    /// Warnings about the load ([`super::SceneReport::notes`]).
+    pub notes: Vec<String>,
     pub objects: usize,
     /// Objects that gave at least one blocker.
     pub blocker_objects: usize,
@@ -63,6 +70,8 @@ pub struct FileSummary {
     pub skipped: usize,
     /// Other city object types, skipped and counted.
     pub other_types: BTreeMap<String, usize>,
+    /// The file's CRS, as the file states it or as detected; `None`: it states none.
+    pub crs: Option<String>,
 }
 
 /// One reported object.
@@ -202,8 +211,12 @@ pub fn summarize(scene: &Scene) -> Summary {
                 objects: f.objects,
                 skipped: f.skipped,
                 other_types: f.other_types.clone(),
+                crs: f.crs.as_ref().map(|c| c.to_string()),
             })
             .collect(),
+        crs: scene.crs().map(|c| c.to_string()),
+        crs_epsg: scene.crs().and_then(|c| c.epsg),
+        notes: scene.report.notes.clone(),
         objects: scene.objects.len(),
         blocker_objects,
         no_blocker_objects: scene.objects.len() - blocker_objects,
