@@ -198,13 +198,14 @@ fn bake_then_inspect_pvs_and_export() {
     let fingerprint = v["scene"].as_str().unwrap();
     assert_eq!(fingerprint.len(), 16);
     assert_ne!(u64::from_str_radix(fingerprint, 16).unwrap(), 0);
-    assert_eq!(v["crs"], "");
+    // Lyon's GeoJSON names its CRS (EPSG:3946), and the store records it.
+    assert_eq!(v["crs"], "EPSG:3946");
     assert_eq!(v["vo_top_levels_above_eye_m"].as_array().unwrap().len(), 32);
     let text = String::from_utf8_lossy(&vocc(&["inspect", s]).stdout).into_owned();
     assert!(text.contains(": vocc store 2.0, "), "{text}");
     assert!(
         text.contains(&format!(
-            "scene: baked for 2576 objects; fingerprint {fingerprint}; CRS unknown"
+            "scene: baked for 2576 objects; fingerprint {fingerprint}; CRS \"EPSG:3946\""
         )),
         "{text}"
     );
