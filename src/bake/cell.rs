@@ -144,14 +144,12 @@ impl CellSetup {
         let f = &plan.frame;
         let (vos, before): (Vec<QVo>, Vec<VoGeom>) = vos.into_iter().unzip();
         stats.unquantized = before;
-        let mut all: Vec<u32> = Vec::new();
+        let mut all = super::spans::Spans::new();
         for q in &vos {
             if let Some(geom) = f.dequantize(id, ground, q) {
-                all.extend(plan.occludees.hidden(view, &geom, plan.reach()));
+                all = all.union(&plan.occludees.hidden(view, &geom, plan.reach()));
             }
         }
-        all.sort_unstable();
-        all.dedup();
         stats.hidden_cost = plan.occludees.cost_of(&all);
         // A cell without VOs stores no ground byte: its ground is 0 in the record.
         let ground = if vos.is_empty() { 0 } else { ground };

@@ -20,6 +20,7 @@ use glam::DVec2;
 
 use super::cell::CellSetup;
 use super::plan::{CellStats, Plan};
+use super::spans::Spans;
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::{QVo, HEIGHT_LEVELS};
 
@@ -41,7 +42,7 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
     let (e0, e1) = (view.e0, view.e1);
     let radius = plan.reach();
     let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
-    let mut hidden: Vec<Vec<u32>> = Vec::new();
+    let mut hidden: Vec<Spans> = Vec::new();
     let clock = |t: &mut Instant| {
         let e = t.elapsed().as_secs_f64() * 1e3;
         *t = Instant::now();
@@ -98,7 +99,10 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
             g,
             h: levels[k as usize],
         };
-        let hid = plan.occludees.hidden(&view, &geom, radius);
+        let mut bounds: Vec<[f64; 6]> = Vec::new();
+        let hid = plan
+            .occludees
+            .hidden_bounds(&view, &geom, radius, |b| bounds.push(*b));
         if hid.is_empty() {
             continue;
         }
@@ -107,12 +111,7 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
         // segment from the cell to it crosses the line within that sub-segment, and rule 3's
         // heights depend on the line only, so the trimmed segment hides what this one does
         // (up to rounding; it is weighed again).
-        let (a, b, hid) = match trim(
-            cell,
-            a,
-            b,
-            hid.iter().map(|&o| &plan.occludees.boxes[o as usize]),
-        ) {
+        let (a, b, hid) = match trim(cell, a, b, bounds.iter()) {
             Some((ta, tb)) if (ta, tb) != (a, b) => {
                 let g = crate::runtime::frame::VoGeom {
                     a: ta.to_array(),
@@ -180,7 +179,7 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
         .collect();
     let picked = select(
         start,
-        &plan.occludees.cost,
+        &plan.occludees.costs,
         plan.params.max_vos,
         plan.params.budget,
         |c| match &c.value {

@@ -3,11 +3,14 @@
 //!
 //! Input: a [`Scene`](crate::scene::Scene) (or boxes and costs). Output: [`Occludees`]: boxes and
 //! costs by position in the hierarchy, and, for a VO seen from a cell, the occludees it hides
-//! (rule 3, the runtime's own test, so a weight is what the runtime will cull).
-//! Invariants: a cost is at least 1; the hidden set of a VO is ascending and holds only
-//! occludees within the given radius of the cell centre (per axis), which is what keeps a cell's
-//! bake within its reach (ARCHITECTURE.md invariant 13).
+//! (rule 3, the runtime's own test, so a weight is what the runtime will cull), as [`Spans`] of
+//! positions found whole subtrees at a time, so weighing against a whole city costs about what
+//! weighing against a neighbourhood does.
+//! Invariants: a cost is at least 1; the hidden set of a VO holds only occludees within the given
+//! radius of the cell centre (per axis), which is what keeps a cell's bake within its reach
+//! (ARCHITECTURE.md invariant 13).
 
+use super::spans::{Costs, Spans};
 use crate::runtime::culler::BoxTree;
 use crate::runtime::frame::{CellView, VoGeom};
 use crate::runtime::occlusion::PreparedVo;
@@ -19,6 +22,8 @@ pub struct Occludees {
     /// Boxes and costs, by position.
     pub boxes: Vec<[f64; 6]>,
     pub cost: Vec<u64>,
+    /// The same costs as prefix sums.
+    pub costs: Costs,
     tree: BoxTree,
 }
 
@@ -27,9 +32,11 @@ impl Occludees {
     pub fn new(boxes: Vec<[f64; 6]>, cost: Vec<u64>) -> Occludees {
         let tree = BoxTree::new(&boxes);
         let by_pos = (0..tree.positions() as u32).map(|p| tree.id_at(p) as usize);
+        let cost: Vec<u64> = by_pos.clone().map(|i| cost[i]).collect();
         Occludees {
-            boxes: by_pos.clone().map(|i| boxes[i]).collect(),
-            cost: by_pos.map(|i| cost[i]).collect(),
+            boxes: by_pos.map(|i| boxes[i]).collect(),
+            costs: Costs::new(&cost),
+            cost,
             tree,
         }
     }
@@ -48,20 +55,47 @@ impl Occludees {
     }
 
     /// The occludees (positions) within `radius` of the cell centre (per axis) that `vo` hides
-    /// from the cell (rule 3), ascending.
-    pub fn hidden(&self, view: &CellView, vo: &VoGeom, radius: f64) -> Vec<u32> {
+    /// from the cell (rule 3).
+    pub fn hidden(&self, view: &CellView, vo: &VoGeom, radius: f64) -> Spans {
+        let mut out = Spans::new();
+        self.hidden_with(view, vo, radius, |s, e, _| out.push(s, e));
+        out
+    }
+
+    /// [`Self::hidden`], also calling `bounds(b)` with the box of each subtree or occludee found
+    /// hidden whole: together they hold every hidden occludee's box.
+    pub fn hidden_bounds(
+        &self,
+        view: &CellView,
+        vo: &VoGeom,
+        radius: f64,
+        mut bounds: impl FnMut(&[f64; 6]),
+    ) -> Spans {
+        let mut out = Spans::new();
+        self.hidden_with(view, vo, radius, |s, e, b| {
+            out.push(s, e);
+            bounds(b);
+        });
+        out
+    }
+
+    fn hidden_with(
+        &self,
+        view: &CellView,
+        vo: &VoGeom,
+        radius: f64,
+        found: impl FnMut(u32, u32, &[f64; 6]),
+    ) {
         let p = PreparedVo::new(view, vo);
         let r = view.rect;
         let (cx, cy) = (0.5 * (r[0] + r[2]), 0.5 * (r[1] + r[3]));
-        let mut out = Vec::new();
-        self.tree.hidden_positions(
+        self.tree.hidden_runs(
             view,
             &p,
             [cx - radius, cy - radius, cx + radius, cy + radius],
             &self.boxes,
-            &mut out,
+            found,
         );
-        out
     }
 
     /// The object at position `pos`.
@@ -69,7 +103,8 @@ impl Occludees {
         self.tree.id_at(pos)
     }
 
-    pub fn cost_of(&self, ids: &[u32]) -> u64 {
-        ids.iter().map(|&i| self.cost[i as usize]).sum()
+    /// The summed cost of `s`.
+    pub fn cost_of(&self, s: &Spans) -> u64 {
+        self.costs.of(s)
     }
 }

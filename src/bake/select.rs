@@ -19,6 +19,8 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+use super::spans::{Costs, Spans};
+
 /// Stop when the best remaining gain is below this share of the cost already hidden.
 pub const MIN_GAIN_SHARE: f64 = 0.002;
 
@@ -33,33 +35,12 @@ pub enum Stage {
     Stored,
 }
 
-/// A candidate: its stage, its value, and what it hides (ascending occludee ids).
+/// A candidate: its stage, its value, and what it hides.
 #[derive(Clone, Debug)]
 pub struct Candidate<T> {
     pub stage: Stage,
     pub value: T,
-    pub hidden: Vec<u32>,
-}
-
-/// Sum of the costs of `ids` not in `covered` (both ascending).
-fn gain(ids: &[u32], covered: &[u32], cost: &[u64]) -> u64 {
-    let mut g = 0;
-    let mut k = 0;
-    for &i in ids {
-        while k < covered.len() && covered[k] < i {
-            k += 1;
-        }
-        if k == covered.len() || covered[k] != i {
-            g += cost[i as usize];
-        }
-    }
-    g
-}
-
-fn merge(covered: &mut Vec<u32>, ids: &[u32]) {
-    covered.extend_from_slice(ids);
-    covered.sort_unstable();
-    covered.dedup();
+    pub hidden: Spans,
 }
 
 #[derive(PartialEq, Eq)]
@@ -86,7 +67,7 @@ impl PartialOrd for Entry {
 /// `budget` proposals are refined (certification is what a bake spends most on).
 pub fn select<T>(
     candidates: Vec<Candidate<T>>,
-    cost: &[u64],
+    cost: &Costs,
     max_vos: usize,
     budget: usize,
     mut refine: impl FnMut(&Candidate<T>) -> Vec<Candidate<T>>,
@@ -95,7 +76,7 @@ pub fn select<T>(
     let mut heap = BinaryHeap::new();
     let push =
         |c: Candidate<T>, all: &mut Vec<Option<Candidate<T>>>, heap: &mut BinaryHeap<Entry>| {
-            let g = gain(&c.hidden, &[], cost);
+            let g = cost.of(&c.hidden);
             if g > 0 {
                 heap.push(Entry {
                     gain: g,
@@ -107,7 +88,7 @@ pub fn select<T>(
     for c in candidates {
         push(c, &mut all, &mut heap);
     }
-    let mut covered: Vec<u32> = Vec::new();
+    let mut covered = Spans::new();
     let mut hidden_cost: u64 = 0;
     let mut out = Vec::new();
     let mut spent = 0;
@@ -116,7 +97,7 @@ pub fn select<T>(
         let Some(c) = all[top.idx].as_ref() else {
             continue;
         };
-        let g = gain(&c.hidden, &covered, cost);
+        let g = cost.gain(&c.hidden, &covered);
         if g < top.gain {
             if g > 0 {
                 heap.push(Entry {
@@ -139,7 +120,7 @@ pub fn select<T>(
         }
         if c.stage == Stage::Stored {
             hidden_cost += g;
-            merge(&mut covered, &c.hidden);
+            covered = covered.union(&c.hidden);
             out.push(c.value);
             continue;
         }
@@ -160,7 +141,7 @@ mod tests {
         Candidate {
             stage: Stage::Stored,
             value: v,
-            hidden,
+            hidden: Spans::from_ids(&hidden),
         }
     }
 
@@ -172,7 +153,7 @@ mod tests {
             stored(1, vec![0, 1, 2, 4]),
             stored(2, vec![5, 6]),
         ];
-        let cost = vec![10; 7];
+        let cost = Costs::new(&[10; 7]);
         assert_eq!(select(c.clone(), &cost, 10, 100, |_| vec![]), vec![0, 2, 1]);
         assert_eq!(select(c, &cost, 2, 100, |_| vec![]), vec![0, 2]);
     }
@@ -184,11 +165,11 @@ mod tests {
             Candidate {
                 stage: Stage::Proposed,
                 value: 0,
-                hidden: vec![0, 1, 2, 3],
+                hidden: Spans::from_ids(&[0, 1, 2, 3]),
             },
             stored(1, vec![1, 2]),
         ];
-        let cost = vec![1; 4];
+        let cost = Costs::new(&[1; 4]);
         let mut refined = 0;
         let picked = select(c, &cost, 10, 100, |p| {
             refined += 1;
@@ -203,9 +184,9 @@ mod tests {
     fn diminishing_gain_stops_the_picks() {
         let c = vec![stored(0, vec![0]), stored(1, vec![1])];
         // 1 more after 1000 is below MIN_GAIN_SHARE (0.2%); 5 more is above it.
-        let cost = vec![1000, 1];
+        let cost = Costs::new(&[1000, 1]);
         assert_eq!(select(c.clone(), &cost, 10, 100, |_| vec![]), vec![0]);
-        let cost = vec![1000, 5];
+        let cost = Costs::new(&[1000, 5]);
         assert_eq!(select(c, &cost, 10, 100, |_| vec![]), vec![0, 1]);
     }
 }

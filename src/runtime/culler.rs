@@ -511,22 +511,24 @@ impl BoxTree {
         self.ids.len()
     }
 
-    /// Appends to `out`, ascending, the tree positions of the boxes meeting the rectangle
-    /// `within = [x0, y0, x1, y1]` that `vo` hides from `view` (rule 3, [`PreparedVo::cover`]):
-    /// whole subtrees at once where their bounds are hidden (rule 3 is monotone under
-    /// inclusion), none below bounds outside the umbra. `boxes` are the boxes by tree
-    /// position (`boxes[p]` is the input box [`Self::id_at`]`(p)`): the leaves keep their grown
-    /// form only ([`Lanes`]), and whether a box meets `within` is asked of the box itself.
+    /// Calls `found(start, end, bounds)`, in ascending order of positions, for runs of tree
+    /// positions of boxes meeting the rectangle `within = [x0, y0, x1, y1]` that `vo` hides from
+    /// `view` (rule 3, [`PreparedVo::cover`]): a whole subtree in one call where its bounds are
+    /// hidden and lie within the rectangle (rule 3 is monotone under inclusion; `bounds` are the
+    /// subtree's), single boxes otherwise (`bounds` the box); none below bounds outside the
+    /// umbra. `boxes` are the boxes by tree position (`boxes[p]` is the input box
+    /// [`Self::id_at`]`(p)`): the leaves keep their grown form only ([`Lanes`]), and whether a
+    /// box meets `within` is asked of the box itself.
     ///
     /// # Panics
     /// When `boxes` does not hold one box per position ([`Self::positions`]).
-    pub fn hidden_positions(
+    pub fn hidden_runs(
         &self,
         view: &crate::runtime::frame::CellView,
         vo: &PreparedVo,
         within: [f64; 4],
         boxes: &[[f64; 6]],
-        out: &mut Vec<u32>,
+        mut found: impl FnMut(u32, u32, &[f64; 6]),
     ) {
         assert_eq!(boxes.len(), self.positions(), "one box per tree position");
         let meets = |b: &[f64; 6]| {
@@ -546,7 +548,7 @@ impl BoxTree {
             match vo.cover_group(view, &node.bounds, f64::from(node.min_top)) {
                 Cover::Outside => continue,
                 Cover::Hidden if inside(&node.bounds) => {
-                    out.extend(node.start..node.end);
+                    found(node.start, node.end, &node.bounds);
                     continue;
                 }
                 _ => {}
@@ -559,7 +561,7 @@ impl BoxTree {
                 for j in 0..n {
                     let p = node.start + j as u32;
                     if hid >> j & 1 == 1 && meets(&boxes[p as usize]) {
-                        out.push(p);
+                        found(p, p + 1, &boxes[p as usize]);
                     }
                 }
                 continue;

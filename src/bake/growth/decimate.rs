@@ -16,22 +16,10 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+use crate::bake::spans::{Costs, Spans};
+
 /// Stop when the best remaining gain is below this share of the cost already hidden.
 pub const MIN_GAIN_SHARE: f64 = 0.01;
-
-/// Sum of the costs of `ids` not in `covered` (both ascending).
-fn gain(ids: &[u32], covered: &[u32], cost: &[u64]) -> u64 {
-    ids.iter()
-        .filter(|i| covered.binary_search(i).is_err())
-        .map(|&i| cost[i as usize])
-        .sum()
-}
-
-fn merge(covered: &mut Vec<u32>, ids: &[u32]) {
-    covered.extend_from_slice(ids);
-    covered.sort_unstable();
-    covered.dedup();
-}
 
 #[derive(PartialEq, Eq)]
 struct Entry {
@@ -51,31 +39,31 @@ impl PartialOrd for Entry {
     }
 }
 
-/// Greedy decimation. `hidden[i]` is what candidate `i` hides on its own (ascending ids);
+/// Greedy decimation. `hidden[i]` is what candidate `i` hides on its own;
 /// `accept(i)` quantizes and verifies candidate `i`, returning the stored form and what it really
 /// hides, or `None` to drop it. Returns the accepted values in pick order.
 pub fn greedy<T>(
-    hidden: &[Vec<u32>],
-    cost: &[u64],
+    hidden: &[Spans],
+    cost: &Costs,
     max_vos: usize,
-    mut accept: impl FnMut(usize) -> Option<(T, Vec<u32>)>,
+    mut accept: impl FnMut(usize) -> Option<(T, Spans)>,
 ) -> Vec<T> {
     let mut heap: BinaryHeap<Entry> = hidden
         .iter()
         .enumerate()
         .map(|(idx, h)| Entry {
-            gain: gain(h, &[], cost),
+            gain: cost.of(h),
             idx,
         })
         .filter(|e| e.gain > 0)
         .collect();
-    let mut covered: Vec<u32> = Vec::new();
+    let mut covered = Spans::new();
     let mut hidden_cost: u64 = 0;
     let mut out = Vec::new();
     let mut tried = vec![false; hidden.len()];
     while out.len() < max_vos {
         let Some(top) = heap.pop() else { break };
-        let g = gain(&hidden[top.idx], &covered, cost);
+        let g = cost.gain(&hidden[top.idx], &covered);
         if g < top.gain {
             // Stale: re-queue with the true gain.
             if g > 0 {
@@ -96,12 +84,12 @@ pub fn greedy<T>(
         let Some((value, real)) = accept(top.idx) else {
             continue;
         };
-        let rg = gain(&real, &covered, cost);
+        let rg = cost.gain(&real, &covered);
         if rg == 0 || (rg as f64) < MIN_GAIN_SHARE * hidden_cost as f64 {
             continue;
         }
         hidden_cost += rg;
-        merge(&mut covered, &real);
+        covered = covered.union(&real);
         out.push(value);
     }
     out
@@ -114,8 +102,10 @@ mod tests {
     #[test]
     fn greedy_corrects_for_overlap_and_keeps_order() {
         // 0 and 1 overlap almost wholly; 2 is smaller but disjoint: after 0, 2 beats 1.
-        let hidden = vec![vec![0, 1, 2, 3], vec![0, 1, 2, 4], vec![5, 6]];
-        let cost = vec![10; 7];
+        let hidden: Vec<Spans> = [&[0, 1, 2, 3][..], &[0, 1, 2, 4], &[5, 6]]
+            .map(Spans::from_ids)
+            .to_vec();
+        let cost = Costs::new(&[10; 7]);
         let picked = greedy(&hidden, &cost, 10, |i| Some((i, hidden[i].clone())));
         assert_eq!(picked, vec![0, 2, 1]);
         assert_eq!(
@@ -126,8 +116,10 @@ mod tests {
 
     #[test]
     fn a_refused_candidate_gives_way_to_the_next() {
-        let hidden = vec![vec![0, 1, 2], vec![0, 1], vec![3]];
-        let cost = vec![1; 4];
+        let hidden: Vec<Spans> = [&[0, 1, 2][..], &[0, 1], &[3]]
+            .map(Spans::from_ids)
+            .to_vec();
+        let cost = Costs::new(&[1; 4]);
         let picked = greedy(&hidden, &cost, 10, |i| {
             (i != 0).then(|| (i, hidden[i].clone()))
         });
@@ -136,8 +128,8 @@ mod tests {
 
     #[test]
     fn diminishing_gain_stops_the_picks() {
-        let hidden = vec![vec![0], vec![1]];
-        let cost = vec![1000, 5];
+        let hidden: Vec<Spans> = [&[0][..], &[1]].map(Spans::from_ids).to_vec();
+        let cost = Costs::new(&[1000, 5]);
         let picked = greedy(&hidden, &cost, 10, |i| Some((i, hidden[i].clone())));
         assert_eq!(picked, vec![0]);
     }

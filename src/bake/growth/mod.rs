@@ -94,7 +94,7 @@ pub(super) fn growth_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) 
     // The dense set, per slice.
     let radius = plan.reach();
     let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
-    let mut hidden: Vec<Vec<u32>> = Vec::new();
+    let mut hidden: Vec<crate::bake::spans::Spans> = Vec::new();
     let mut grower = CellGrower::new(&cell, &plan.set, &plan.params.grow, plan.params.search_m);
     let win = {
         let (lo, hi) = window(f, centre);
@@ -107,7 +107,7 @@ pub(super) fn growth_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) 
                     b: DVec2,
                     chain: &[u32],
                     cands: &mut Vec<(u8, DVec2, DVec2)>,
-                    hidden: &mut Vec<Vec<u32>>| {
+                    hidden: &mut Vec<crate::bake::spans::Spans>| {
         // Only the part inside the quantization window (less a grid step) can be stored.
         let Some((a, b)) = clip(a, b, win.0, win.1) else {
             return;
@@ -168,7 +168,7 @@ pub(super) fn growth_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) 
     let mut dropped = 0;
     let mut all_checks = 0;
     let all: Vec<(u32, Support)> = near.iter().copied().zip(support.iter().copied()).collect();
-    let vos = greedy(&hidden, &plan.occludees.cost, plan.params.max_vos, |i| {
+    let vos = greedy(&hidden, &plan.occludees.costs, plan.params.max_vos, |i| {
         let (k, a, b) = cands[i];
         tried += 1;
         // At the slice's level first; when rule 2 leaves too few blockers for the verifier
