@@ -5,6 +5,7 @@
 //! Invariant: every numeric option is parsed here, by one rule (finite numbers, ranges checked
 //! at parse time), so a bad value is a usage error (exit status 2) whatever the option.
 
+use clap::error::ErrorKind;
 use clap::Args;
 
 use vocc::bake::params::{Effort, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
@@ -58,6 +59,38 @@ pub struct ReadArgs {
     /// UTM zone of its centre.
     #[arg(long, value_name = "EPSG:N")]
     pub crs: Option<String>,
+}
+
+/// A usage error found after parsing (a missing or conflicting argument that clap's
+/// declarations cannot express), raised before anything is read; `main` prints it as clap
+/// prints its own, with the command's usage, and exits with status 2.
+#[derive(Debug)]
+pub struct UsageError {
+    /// The subcommand whose usage is shown.
+    pub command: &'static str,
+    pub kind: ErrorKind,
+    pub message: String,
+}
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// A [`UsageError`] of `command`, as an `anyhow::Error`.
+pub fn usage(
+    command: &'static str,
+    kind: ErrorKind,
+    message: impl std::fmt::Display,
+) -> anyhow::Error {
+    anyhow::Error::new(UsageError {
+        command,
+        kind,
+        message: message.to_string(),
+    })
 }
 
 /// Checking a scene against the one a store was baked from (`pvs`, `eval`, `render`,

@@ -22,8 +22,8 @@ use crate::args::{
     parse_max_vos, parse_rect, parse_shard, parse_slices, ReadArgs, ShardSpec,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
-use crate::plural;
 use crate::progress::Progress;
+use crate::report::plural;
 
 #[derive(Args)]
 #[command(after_help = "Examples:
@@ -126,7 +126,7 @@ pub fn shard(
             (Some(n), _) => n,
             (None, Some(c)) if var == "SLURM_ARRAY_TASK_ID" => num("SLURM_ARRAY_TASK_COUNT", &c)?,
             _ => {
-                return Err(crate::usage(
+                return Err(crate::args::usage(
                     "bake",
                     ErrorKind::MissingRequiredArgument,
                     format!(
@@ -163,7 +163,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         if n > cores.get() {
             eprintln!(
                 "note: --threads {n} on {}: the extra threads only share them (no faster; the store is the same)",
-                crate::plural(cores.get(), "core", "cores")
+                crate::report::plural(cores.get(), "core", "cores")
             );
         }
     }
@@ -199,7 +199,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         job = job.shard(i, n)?;
         eprintln!(
             "shard {i}/{n}: {}",
-            crate::plural(job.selected()?.len(), "cell", "cells")
+            crate::report::plural(job.selected()?.len(), "cell", "cells")
         );
     }
     if let Some(n) = a.threads {
@@ -267,7 +267,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
     if a.json {
         let mut v = summary_json(sum)?;
         v["load_s"] = load_s.into();
-        crate::eval::round_timings(&mut v);
+        crate::report::round_timings(&mut v);
         v["store"] = a.output.display().to_string().into();
         v["hashes"] = hashes_file.display().to_string().into();
         let mut out = std::io::stdout().lock();

@@ -52,7 +52,7 @@ pub fn boxes(files: &[PathBuf], read: &ReadArgs, output: &Path) -> Result<()> {
     })?;
     eprintln!(
         "wrote {} to {} (scene {:016x})",
-        crate::plural(s.objects.len(), "box", "boxes"),
+        crate::report::plural(s.objects.len(), "box", "boxes"),
         output.display(),
         s.fingerprint()
     );

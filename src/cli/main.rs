@@ -14,7 +14,8 @@ use clap::{ArgGroup, Parser, Subcommand};
 use vocc::scene;
 
 use args::{
-    parse_buildings, parse_cell_size, parse_num, parse_positive, parse_xy, ReadArgs, SceneCheckArgs,
+    parse_buildings, parse_cell_size, parse_num, parse_positive, parse_xy, usage, ReadArgs,
+    SceneCheckArgs,
 };
 use files::write_atomically;
 
@@ -26,6 +27,7 @@ mod files;
 mod info;
 mod progress;
 mod render;
+mod report;
 mod store;
 
 /// The exit status rule, shown by `--help`.
@@ -222,9 +224,9 @@ fn main() {
     let code = match run(cli) {
         Ok(code) => code,
         Err(e) if broken_pipe(&e) => 0,
-        Err(e) => match e.downcast::<clap::Error>() {
+        Err(e) => match e.downcast::<args::UsageError>() {
             // A usage error found after parsing: clap's form and status (2).
-            Ok(usage) => usage.exit(),
+            Ok(u) => usage_error(&u).exit(),
             Err(e) => {
                 eprintln!("error: {e:#}");
                 1
@@ -234,23 +236,16 @@ fn main() {
     std::process::exit(code);
 }
 
-/// A usage error of `command` found after parsing (a missing or conflicting argument that clap
-/// cannot express): printed as clap prints its own, with the command's usage, exit status 2.
-/// Raised before anything is read.
-pub fn usage(command: &str, kind: ErrorKind, message: impl std::fmt::Display) -> anyhow::Error {
+/// A usage error found after a command started ([`args::UsageError`]) as clap prints its
+/// own: the message and the command's usage, exit status 2.
+fn usage_error(u: &args::UsageError) -> clap::Error {
     use clap::CommandFactory;
     let mut cli = Cli::command();
     cli.build();
-    let e = match cli.find_subcommand_mut(command) {
-        Some(c) => c.error(kind, message),
-        None => cli.error(kind, message),
-    };
-    anyhow::Error::new(e)
-}
-
-/// `n` and the noun, singular for 1: "1 cell", "2 cells".
-pub fn plural(n: usize, one: &str, many: &str) -> String {
-    format!("{n} {}", if n == 1 { one } else { many })
+    match cli.find_subcommand_mut(u.command) {
+        Some(c) => c.error(u.kind, &u.message),
+        None => cli.error(u.kind, &u.message),
+    }
 }
 
 /// The old spellings of renamed options still work; each use gets a note on stderr.

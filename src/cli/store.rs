@@ -323,14 +323,14 @@ fn list_cells(a: &InspectArgs, store: &Store) -> Result<()> {
 pub fn inspect(a: InspectArgs) -> Result<()> {
     // Usage first, before anything is read.
     if a.list_cells && a.sort == SortKey::Culled && a.scene.is_empty() {
-        return Err(crate::usage(
+        return Err(crate::args::usage(
             "inspect",
             ErrorKind::MissingRequiredArgument,
             "--sort culled needs the scene files after the store",
         ));
     }
     if !a.list_cells && !a.scene.is_empty() {
-        return Err(crate::usage(
+        return Err(crate::args::usage(
             "inspect",
             ErrorKind::ArgumentConflict,
             "scene files are read only with --list-cells (each cell's share of objects culled)",
