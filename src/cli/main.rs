@@ -36,9 +36,15 @@ const EXIT_STATUS: &str = "Exit status:
   1  the run failed: an input cannot be read or is refused, an output cannot be written, or the
      options do not fit the scene (a region outside the grid, a grid too large)
   2  the command line is wrong: an unknown option, a missing argument, or a value outside its
-     option's range (checked before anything is read)
+     option's range (checked before anything is read, printed with the command's usage)
   3  vocc eval: a false cull, or a ray from an eye reaching a stored VO unblocked
-A closed output pipe (vocc ... | head) ends the run quietly with status 0.";
+A closed output pipe (vocc ... | head) ends the run quietly with status 0.
+
+Outputs: vocc creates the output it is asked for (a file, or eval --report's folder), never the
+folders above it (a missing one is refused before any work), and writes it all or nothing. No
+output may be one of the inputs. A store read with scene files (pvs, eval, render, inspect
+--list-cells) must be given the scene it was baked from: another one is refused, naming what
+differs (--allow-other-scene goes on with a warning).";
 
 #[derive(Parser)]
 #[command(

@@ -85,7 +85,7 @@ fn cell_json(f: &Frame, id: CellId, rec: &CellRecord, major: u16) -> serde_json:
     })
 }
 
-/// How `inspect --cells` orders its rows.
+/// How `inspect --list-cells` orders its rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum SortKey {
     /// Ascending cell id.
@@ -221,7 +221,7 @@ fn scene_boxes_and_features(
     Ok((world.len(), BoxTree::from_world(&world, f.origin), features))
 }
 
-/// `inspect --cells`: one row per cell.
+/// `inspect --list-cells`: one row per cell.
 fn list_cells(a: &InspectArgs, store: &Store) -> Result<()> {
     let f = *store.frame();
     let scene = if a.scene.is_empty() {
