@@ -215,9 +215,8 @@ def test_the_bake_releases_the_gil():
     assert ticks >= max(5, elapsed * 20), f"{ticks} ticks in {elapsed:.2f} s"
 
 
-def cli_boxes(path, *flags):
-    """`vocc boxes` of a scene: (ids, boxes, the "# scene" line)."""
-    out = Path(str(path) + ".boxes")
+def cli_boxes(out, path, *flags):
+    """`vocc boxes` of a scene into the file `out`: (ids, boxes, the "# scene" line)."""
     subprocess.run([VOCC, "boxes", str(path), *flags, "-o", str(out)], check=True, capture_output=True)
     lines = out.read_text().splitlines()
     rows = [[float(v) for v in l.split()] for l in lines if not l.startswith("#")]
@@ -233,7 +232,7 @@ def test_three_numberings_pvs_gives_input_feature_numbers_with_ids_beside_the_bo
     scene = vocc.scene_boxes(LYON, **flags)
     assert len(scene) == scene.objects == 2571 and scene.skipped == 5
     assert 13 not in scene.ids.tolist() and scene.ids[-1] == 2575
-    ids, boxes, line = cli_boxes(LYON, "--height-attr", "HAUTEUR", "--base-attr", "Z_MIN_SOL")
+    ids, boxes, line = cli_boxes(tmp_path / "lyon.boxes", LYON, "--height-attr", "HAUTEUR", "--base-attr", "Z_MIN_SOL")
     assert scene.ids.tolist() == ids
     assert scene.boxes.tolist() == boxes
     assert line.startswith(f"# scene {scene.fingerprint:016x} objects 2571 crs \"EPSG:3946\"")
@@ -286,7 +285,8 @@ def test_reader_options_are_the_clis_default_height_on_bad_height_types_levels_a
     flags = ["--height-attr", "h", "--levels-attr", "levels", "--default-height", "5"]
     opts = dict(height_attr="h", levels_attr="levels", default_height=5)
     scene = vocc.scene_boxes(row, **opts)
-    ids, boxes, line = cli_boxes(row, *flags)
+    out = tmp_path / "row.boxes"
+    ids, boxes, line = cli_boxes(out, row, *flags)
     assert scene.ids.tolist() == ids == [0, 1, 2, 3]
     assert scene.boxes.tolist() == boxes
     assert [b[5] for b in boxes] == [5.0, 5.0, 12.0, 9.0]
@@ -302,18 +302,18 @@ def test_reader_options_are_the_clis_default_height_on_bad_height_types_levels_a
     # --crs: the scene projected, as the CLI's.
     projected = vocc.scene_boxes(row, crs="EPSG:2154", **opts)
     assert projected.crs == "EPSG:2154"
-    assert projected.boxes.tolist() == cli_boxes(row, *flags, "--crs", "EPSG:2154")[1]
+    assert projected.boxes.tolist() == cli_boxes(out, row, *flags, "--crs", "EPSG:2154")[1]
     # --types: a CityJSON Bridge is read only when asked for.
     city = tmp_path / "bridge.city.json"
     city.write_text(json.dumps(BRIDGE))
     assert len(vocc.scene_boxes(city)) == 1
     both = vocc.scene_boxes(city, types=["Bridge"])
-    assert both.ids.tolist() == cli_boxes(city, "--types", "Bridge")[0] == [0, 1]
+    assert both.ids.tolist() == cli_boxes(out, city, "--types", "Bridge")[0] == [0, 1]
     assert vocc.scene_boxes(city, types="Bridge").ids.tolist() == [0, 1]
     # The bake with the same options gives the CLI's bytes.
-    out = tmp_path / "row.vocc"
-    cli("bake", str(row), *flags, "--cell-size", "50", "-o", str(out))
-    assert vocc.bake(row, cell_size=50, progress=False, **opts).to_bytes() == out.read_bytes()
+    store = tmp_path / "row.vocc"
+    cli("bake", str(row), *flags, "--cell-size", "50", "-o", str(store))
+    assert vocc.bake(row, cell_size=50, progress=False, **opts).to_bytes() == store.read_bytes()
 
 
 def test_pvs_with_another_scene_is_refused_naming_what_differs(baked):
