@@ -2239,7 +2239,8 @@ fn cells_is_now_walkable_sample_and_list_cells_and_the_old_spelling_gets_a_note(
             "1",
         ])
     };
-    let spellings: Vec<((Option<i32>, String), (Option<i32>, String), &str)> = vec![
+    type Run = (Option<i32>, String);
+    let spellings: Vec<(Run, Run, &str)> = vec![
         (
             run(&[
                 "bake",
