@@ -2291,7 +2291,7 @@ fn cells_is_now_walkable_sample_and_list_cells_and_the_old_spelling_gets_a_note(
 #[test]
 fn one_cell_on_one_thread_is_singular_not_1_cells_1_threads() {
     let dir = common::temp_dir("cli-plurals");
-    let (scene, _) = tiny_scene_and_store(&dir);
+    let (scene, store) = tiny_scene_and_store(&dir);
     let (rc, err) = run(&[
         "bake",
         &scene,
@@ -2316,6 +2316,25 @@ fn one_cell_on_one_thread_is_singular_not_1_cells_1_threads() {
     assert!(
         !err.contains("1 cells") && !err.contains("1 threads"),
         "{err}"
+    );
+    // eval of one cell.
+    let out = vocc(&[
+        "eval",
+        &store,
+        &scene,
+        "--height-attr",
+        "height",
+        "--cell",
+        "24",
+        "--eyes",
+        "4",
+        "--samples",
+        "1",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.starts_with("1 cell, 64 objects: 0 false culls;"),
+        "{text}"
     );
 }
 

@@ -245,9 +245,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
             None => {}
         }
         eprintln!(
-            "incremental: {} of {} cells changed since {}, {} reused",
+            "incremental: {} of {} changed since {}, {} reused",
             r.changed,
-            sum.cells_selected,
+            plural(sum.cells_selected, "cell", "cells"),
             old.display(),
             r.reused
         );

@@ -31,7 +31,7 @@ use crate::files::{
     check_output, check_report_dir, parse, read_store, write_atomically, write_report,
 };
 use crate::progress::Progress;
-use crate::report::round_timings;
+use crate::report::{plural, round_timings};
 use crate::store::load_checked;
 
 /// Ground-truth sampling options.
@@ -154,10 +154,10 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
     } else {
         writeln!(
             out,
-            "{} cells, {} objects: {} false culls; PVS/VS median {:.2} (objects), {:.2} (triangles); {:.1}% of objects culled on average; culler {:.0} µs median",
-            sum.cells,
-            sum.objects,
-            sum.false_culls,
+            "{}, {}: {}; PVS/VS median {:.2} (objects), {:.2} (triangles); {:.1}% of objects culled on average; culler {:.0} µs median",
+            plural(sum.cells, "cell", "cells"),
+            plural(sum.objects, "object", "objects"),
+            plural(sum.false_culls, "false cull", "false culls"),
             sum.median_ratio,
             sum.median_ratio_triangles,
             100.0 * sum.occluded_share,
@@ -242,8 +242,9 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
     }
     if sum.false_culls > 0 || rays.reached > 0 {
         eprintln!(
-            "error: {} false culls (visible objects the PVS misses), {} rays reached a VO unblocked",
-            sum.false_culls, rays.reached
+            "error: {} (visible objects the PVS misses), {} reached a VO unblocked",
+            plural(sum.false_culls, "false cull", "false culls"),
+            plural(rays.reached as usize, "ray", "rays")
         );
         return Ok(3);
     }

@@ -112,8 +112,8 @@ pub fn render_store(
         vocc::eval::picture::cell_picture(&s, &f, id, &rec, &visible, Some(&base_visible), radius);
     write_atomically(output, |w| w.write_all(svg.as_bytes()))?;
     eprintln!(
-        "cell {id}: {} VOs; {} of {} objects potentially visible ({} with single buildings alone); wrote {}",
-        rec.vos().len(),
+        "cell {id}: {}; {} of {} objects potentially visible ({} with single buildings alone); wrote {}",
+        crate::report::plural(rec.vos().len(), "VO", "VOs"),
         visible.len(),
         s.objects.len(),
         base_visible.len(),

@@ -25,6 +25,7 @@ use vocc::scene::{self, Scene};
 
 use crate::args::{ReadArgs, SceneCheckArgs};
 use crate::files::{check_output, parse, read_store, write_atomically};
+use crate::report::plural;
 
 fn cell_record(store: &Store, id: CellId) -> Result<CellRecord> {
     anyhow::ensure!(
@@ -363,9 +364,9 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
             match rec {
                 CellRecord::Skipped => "skipped (inside a building), no VOs".to_string(),
                 _ => format!(
-                    "ground {:.2} m, {} VOs, {} bytes",
+                    "ground {:.2} m, {}, {} bytes",
                     f.ground_z(rec.ground()) + o[2],
-                    rec.vos().len(),
+                    plural(rec.vos().len(), "VO", "VOs"),
                     store.cell_bytes(id)
                 ),
             }
@@ -448,9 +449,10 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     }
     writeln!(
         out,
-        "{}: vocc store {major}.{minor}, {} bytes, {n} cells ({:.1} bytes per cell)",
+        "{}: vocc store {major}.{minor}, {} bytes, {} ({:.1} bytes per cell)",
         path.display(),
         bytes.len(),
+        plural(n as usize, "cell", "cells"),
         bytes.len() as f64 / n.max(1) as f64
     )?;
     writeln!(
@@ -483,8 +485,9 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     )?;
     writeln!(
         out,
-        "VOs: {vos} ({:.2} per cell, at most {most}); {skipped} cells skipped (inside a building)",
-        vos as f64 / n.max(1) as f64
+        "VOs: {vos} ({:.2} per cell, at most {most}); {} skipped (inside a building)",
+        vos as f64 / n.max(1) as f64,
+        plural(skipped, "cell", "cells")
     )?;
     let h: Vec<String> = hist
         .iter()
@@ -564,11 +567,11 @@ pub fn pvs(
     } else {
         writeln!(
             out,
-            "cell {id}: {} of {} objects potentially visible ({:.1}%), {} VOs, built in {us:.0} µs ({} nodes tested)",
+            "cell {id}: {} of {} objects potentially visible ({:.1}%), {}, built in {us:.0} µs ({} nodes tested)",
             visible.len(),
             objects,
             100.0 * visible.len() as f64 / objects.max(1) as f64,
-            st.vos,
+            plural(st.vos, "VO", "VOs"),
             st.nodes_tested
         )?;
     }
@@ -637,8 +640,8 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
             let frame_file = frame_path(&file);
             write_atomically(&frame_file, |w| w.write_all(&encode_frame(&f)))?;
             eprintln!(
-                "wrote cell {id} ({} VOs) as a {}-byte blob to {}, and the {}-byte frame it decodes with to {}",
-                rec.vos().len(),
+                "wrote cell {id} ({}) as a {}-byte blob to {}, and the {}-byte frame it decodes with to {}",
+                plural(rec.vos().len(), "VO", "VOs"),
                 blob.len(),
                 file.display(),
                 encode_frame(&f).len(),
