@@ -33,15 +33,21 @@ fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, cell_size: f64, region:
     // The same store and boxes (world) for the C timing loop, examples/c/bench.c (make c-bench).
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     std::fs::write(dir.join(format!("culler-{name}.vocc")), &bytes).unwrap();
+    // The box file as `vocc boxes` writes it: two '#' lines, then ID and box per object.
     let o = s.origin;
-    let text: String = s
-        .objects
-        .iter()
-        .map(|ob| {
-            let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
-            format!("{} {} {} {} {} {}\n", a.x, a.y, a.z, b.x, b.y, b.z)
-        })
-        .collect();
+    let mut text = format!(
+        "# vocc boxes: one object a line, ID XMIN YMIN ZMIN XMAX YMAX ZMAX\n# scene {:016x} objects {} crs {:?}\n",
+        s.fingerprint(),
+        s.objects.len(),
+        s.crs().map_or("", |c| c.name.as_str())
+    );
+    for ob in &s.objects {
+        let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
+        text += &format!(
+            "{} {} {} {} {} {} {}\n",
+            ob.feature, a.x, a.y, a.z, b.x, b.y, b.z
+        );
+    }
     std::fs::write(dir.join(format!("culler-{name}.boxes")), text).unwrap();
     let cells: Vec<u32> = (0..store.cell_count())
         .filter(|&id| !store.cell(id).unwrap().vos().is_empty())

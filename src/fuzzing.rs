@@ -376,7 +376,7 @@ mod scene_targets {
     /// World origin the walkable target subtracts (Lyon's, as the seeds are from Lyon).
     pub const WALKABLE_ORIGIN: DVec3 = DVec3::new(1_842_000.0, 5_175_000.0, 0.0);
 
-    /// Fuzz target `walkable`: the `--cells` reader, then cell selection over a 4 x 4 grid laid
+    /// Fuzz target `walkable`: the `--walkable` reader, then cell selection over a 4 x 4 grid laid
     /// on the area's extent. Returns the number of rings.
     pub fn walkable(data: &[u8]) -> Result<usize, LoadError> {
         let area = walkable::read_bytes(Path::new("fuzz-cells.geojson"), data, WALKABLE_ORIGIN)?;

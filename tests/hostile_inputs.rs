@@ -140,7 +140,20 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
     let path = dir.join("s.vocc");
     let p = path.to_str().unwrap();
     let sc = scene.to_str().unwrap();
-    let pvs = |p: &str| vocc(&["pvs", p, sc, "--height-attr", "height", "--cell", "2"]);
+    // The store's scene section is made up (one object, a fixed fingerprint, EPSG:2154), so the
+    // scene check is told to go on: the damage is what is under test.
+    let pvs = |p: &str| {
+        vocc(&[
+            "pvs",
+            p,
+            sc,
+            "--height-attr",
+            "height",
+            "--cell",
+            "2",
+            "--allow-other-scene",
+        ])
+    };
 
     // The undamaged store works, so every refusal below is the damage's doing.
     std::fs::write(&path, &good).unwrap();

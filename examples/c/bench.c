@@ -3,8 +3,8 @@
  *
  *   bench STORE BOXES [PASSES]
  *
- * Setup (not timed): open the store, build the box tree from BOXES (world coordinates, as for
- * pvs.c), make a query. A cell entry is what an engine does when the camera enters a cell:
+ * Setup (not timed): open the store, build the box tree from BOXES (a box file as `vocc boxes`
+ * writes it, world coordinates, as for pvs.c), make a query. A cell entry is what an engine does when the camera enters a cell:
  * vocc_store_cell, then vocc_pvs into a caller buffer of vocc_tree_len ids (and, timed
  * apart, with ids NULL, reading the result in place through vocc_query_ids). Cells are the
  * store's cells with VOs, entered round robin as in the Rust benchmark. Each of PASSES
@@ -64,18 +64,20 @@ int main(int argc, char **argv) {
     text[text_len] = '\0';
     size_t objects = 0, cap = 1024;
     double *boxes = malloc(cap * 6 * sizeof *boxes);
+    /* The box file of `vocc boxes`: '#' lines, then "ID xmin ymin zmin xmax ymax zmax" lines
+       (the ids are not needed to time the culler). */
     for (char *p = text; *p;) {
+        char *eol = strchr(p, '\n');
+        if (eol) *eol = '\0';
         char *end;
-        double v = strtod(p, &end);
-        if (end == p) {
-            p++;
-            continue;
+        strtoul(p, &end, 10);
+        if (*p != '#' && end != p) {
+            if (objects == cap) boxes = realloc(boxes, (cap *= 2) * 6 * sizeof *boxes);
+            for (int k = 0; k < 6; k++) boxes[objects * 6 + k] = strtod(end, &end);
+            objects++;
         }
-        if (objects * 6 + 6 > cap * 6) boxes = realloc(boxes, (cap *= 2) * 6 * sizeof *boxes);
-        boxes[objects * 6 + 0] = v;
-        for (int k = 1; k < 6; k++) boxes[objects * 6 + k] = strtod(end, &end);
-        objects++;
-        p = end;
+        if (!eol) break;
+        p = eol + 1;
     }
     VoccError err;
     VoccStore *store;

@@ -5,10 +5,13 @@
  *
  *   pvs STORE BOXES (--cell ID | --at X,Y) [--json]
  *
- * STORE is a file written by `vocc bake`. BOXES is a text file with one object box per line,
- * "xmin ymin zmin xmax ymax zmax" in world coordinates, objects in the scene's order (lines
- * starting with '#' are comments); `cargo run --example boxes` writes one from scene files.
- * --at takes a world position. Exit status: 0, or 1 with a message on stderr.
+ * STORE is a file written by `vocc bake`. BOXES is the text file `vocc boxes` writes from the
+ * same scene files and reader flags: one object per line, "ID xmin ymin zmin xmax ymax zmax" in
+ * world coordinates, ID its input feature number, objects in the scene's order; lines starting
+ * with '#' are comments, and "# scene FINGERPRINT objects N ..." names the scene, which is
+ * checked against the store's (a box file of another scene is refused). The PVS is printed by
+ * id, the numbering of `vocc pvs`. --at takes a world position. Exit status: 0, or 1 with a
+ * message on stderr.
  */
 #include <errno.h>
 #include <stdio.h>
@@ -43,44 +46,80 @@ static unsigned char *read_file(const char *path, size_t *len) {
     return buf;
 }
 
-/* Reads the box file: 6 doubles per object; NULL with a message on failure. */
-static double *read_boxes(const char *path, size_t *count) {
+/* A box file, as `vocc boxes` writes it: per object its id (input feature number) and box. */
+typedef struct {
+    double *boxes;      /* 6 doubles per object: xmin ymin zmin xmax ymax zmax, world */
+    uint32_t *ids;      /* per object, its id */
+    size_t count;
+    int has_scene;      /* whether the "# scene" line was there */
+    unsigned long long scene;
+    unsigned long objects;
+} BoxFile;
+
+/* Reads the box file; 0 with a message on failure. */
+static int read_boxes(const char *path, BoxFile *out) {
+    memset(out, 0, sizeof *out);
     FILE *f = fopen(path, "r");
     if (!f) {
         fprintf(stderr, "pvs: cannot open %s: %s\n", path, strerror(errno));
-        return NULL;
+        return 0;
     }
     size_t cap = 1024, n = 0, line_no = 0;
     double *boxes = malloc(cap * 6 * sizeof *boxes);
+    uint32_t *ids = malloc(cap * sizeof *ids);
     char line[512];
-    while (boxes && fgets(line, sizeof line, f)) {
+    int ok = boxes && ids;
+    while (ok && fgets(line, sizeof line, f)) {
         line_no++;
         char *p = line;
         while (*p == ' ' || *p == '\t') p++;
-        if (*p == '#' || *p == '\n' || *p == '\r' || *p == '\0') continue;
-        if (n == cap) {
-            double *bigger = realloc(boxes, (cap *= 2) * 6 * sizeof *boxes);
-            if (!bigger) free(boxes);
-            boxes = bigger;
-            if (!boxes) break;
+        if (*p == '#') {
+            /* "# scene FINGERPRINT objects N crs "NAME"": what to check against the store. */
+            if (sscanf(p, "# scene %llx objects %lu", &out->scene, &out->objects) == 2)
+                out->has_scene = 1;
+            continue;
         }
-        for (int k = 0; k < 6; k++) {
-            char *end;
-            boxes[6 * n + k] = strtod(p, &end);
-            if (end == p) {
-                fprintf(stderr, "pvs: %s:%zu: expected 6 numbers\n", path, line_no);
-                free(boxes);
-                fclose(f);
-                return NULL;
+        if (*p == '\n' || *p == '\r' || *p == '\0') continue;
+        if (n == cap) {
+            cap *= 2;
+            double *b = realloc(boxes, cap * 6 * sizeof *boxes);
+            if (b) boxes = b;
+            uint32_t *d = realloc(ids, cap * sizeof *ids);
+            if (d) ids = d;
+            if (!b || !d) {
+                fprintf(stderr, "pvs: out of memory reading %s\n", path);
+                ok = 0;
+                break;
             }
+        }
+        char *end;
+        unsigned long id = strtoul(p, &end, 10);
+        ok = end != p && id <= 0xFFFFFFFFul;
+        p = end;
+        for (int k = 0; ok && k < 6; k++) {
+            boxes[6 * n + k] = strtod(p, &end);
+            ok = end != p;
             p = end;
         }
-        n++;
+        if (!ok) {
+            fprintf(stderr,
+                    "pvs: %s:%zu: expected an id and 6 numbers, ID XMIN YMIN ZMIN XMAX YMAX ZMAX "
+                    "(`vocc boxes` writes this file)\n",
+                    path, line_no);
+            break;
+        }
+        ids[n++] = (uint32_t)id;
     }
-    if (!boxes) fprintf(stderr, "pvs: out of memory reading %s\n", path);
     fclose(f);
-    *count = n;
-    return boxes;
+    if (!ok) {
+        free(boxes);
+        free(ids);
+        return 0;
+    }
+    out->boxes = boxes;
+    out->ids = ids;
+    out->count = n;
+    return 1;
 }
 
 int main(int argc, char **argv) {
@@ -97,9 +136,11 @@ int main(int argc, char **argv) {
     VoccQuery *query = NULL;
     uint32_t *ids = NULL;
     size_t store_len = 0, objects = 0;
+    BoxFile bf = {0};
     unsigned char *bytes = read_file(store_path, &store_len);
-    double *boxes = bytes ? read_boxes(boxes_path, &objects) : NULL;
-    if (!boxes) goto done;
+    if (!bytes || !read_boxes(boxes_path, &bf)) goto done;
+    double *boxes = bf.boxes;
+    objects = bf.count;
 
     /* Once per store: open it (the bytes stay ours and must outlive the store). */
     if (vocc_store_open(bytes, store_len, &store, &err) != VOCC_OK) {
@@ -108,6 +149,23 @@ int main(int argc, char **argv) {
     }
     VoccFrame frame;
     vocc_store_frame(store, &frame);
+
+    /* The boxes must be those of the scene the store was baked from (a 1.0 store records none). */
+    VoccStoreInfo info;
+    vocc_store_info(store, &info);
+    if (info.scene == 0) {
+        fprintf(stderr, "pvs: note: %s (store %u.%u) records no scene: the boxes could not be "
+                "checked against it\n", store_path, info.major, info.minor);
+    } else if (!bf.has_scene) {
+        fprintf(stderr, "pvs: note: %s names no scene: the boxes could not be checked against "
+                "the store\n", boxes_path);
+    } else if (bf.scene != info.scene || (info.objects != 0 && bf.objects != info.objects)) {
+        fprintf(stderr, "pvs: %s holds another scene than the one %s was baked from (%lu objects, "
+                "fingerprint %016llx; baked: %u objects, fingerprint %016llx): write it with "
+                "`vocc boxes` from the files and reader flags of the bake\n", boxes_path,
+                store_path, bf.objects, bf.scene, info.objects, (unsigned long long)info.scene);
+        goto done;
+    }
 
     /* Once per scene: the box tree (world boxes, so with the frame's origin) and a query. */
     if (vocc_tree_new(boxes, objects, frame.origin, &tree, &err) != VOCC_OK ||
@@ -153,13 +211,12 @@ int main(int argc, char **argv) {
 
     if (json) {
         printf("{\"cell\":%u,\"objects\":%zu,\"pvs\":[", id, objects);
-        for (size_t i = 0; i < count; i++) printf(i ? ",%u" : "%u", ids[i]);
+        /* PVS entries are positions in the box array; the file's ids are what they name. */
+        for (size_t i = 0; i < count; i++) printf(i ? ",%u" : "%u", bf.ids[ids[i]]);
         printf("]}\n");
     } else {
         /* What the store says about itself (a 1.0 store records no scene), and the cell's VOs
            as stored: endpoint grid indices with their exponents, and the height level. */
-        VoccStoreInfo info;
-        vocc_store_info(store, &info);
         printf("store %u.%u, baked for %u objects, scene %016llx, CRS \"%s\"\n", info.major,
                info.minor, info.objects, (unsigned long long)info.scene, info.crs);
         printf("cell %u: %zu of %zu objects potentially visible, %u VOs%s\n", id, count,
@@ -177,7 +234,8 @@ done:
     vocc_query_free(query);
     vocc_tree_free(tree);
     vocc_store_free(store);
-    free(boxes);
+    free(bf.boxes);
+    free(bf.ids);
     free(bytes);
     return rc;
 }

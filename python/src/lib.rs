@@ -1,10 +1,13 @@
 //! `vocc._vocc`, the native half of the Python package (the Python half, `vocc/__init__.py`,
 //! turns its bytes into numpy arrays and gives the public API).
 //!
-//! Input: scene paths and reader and bake options (`bake`, `scene_boxes`); store bytes, cell
-//! ids, world positions and object boxes through the buffer protocol (`RawStore`, `RawTree`).
-//! Output: store and hashes bytes with the bake summary as JSON; frames as dicts; VOs, boxes and
-//! PVS ids as little-endian bytes for `numpy.frombuffer`.
+//! Input: scene paths, reader options (a dict with the CLI's reader flags, `read_options`) and
+//! bake options (`bake`, `scene_boxes`); store bytes, cell ids, world positions and object boxes
+//! through the buffer protocol (`RawStore`, `RawTree`).
+//! Output: store and hashes bytes with the bake summary as JSON; frames as dicts; VOs, boxes,
+//! their input feature numbers and PVS positions as little-endian bytes for `numpy.frombuffer`;
+//! a scene's facts (objects, fingerprint, CRS, skipped features) and their check against a
+//! store's scene section (`vocc::scene::check`, as the CLI checks).
 //! Invariants:
 //! - the bake is `vocc::bake::job::BakeJob`, the CLI's own job, so a bake here gives the bytes
 //!   `vocc bake` gives for the same options; scene loading and the bake run with the GIL
@@ -30,7 +33,8 @@ use vocc::bake::job::{BakeJob, Progress};
 use vocc::bake::params::{BakeParams, Slices};
 use vocc::runtime::culler::{pvs, BoxTree, MAX_BOXES};
 use vocc::runtime::format::{CellRecord, Store};
-use vocc::scene::{self, ReadOptions};
+use vocc::scene::check::{self, SceneCheck, SceneFacts};
+use vocc::scene::{self, OnBadHeight, ReadOptions};
 
 create_exception!(
     _vocc,
@@ -43,21 +47,88 @@ fn lib_err(e: impl std::fmt::Display) -> PyErr {
     VoccError::new_err(e.to_string())
 }
 
-fn read_options(
-    height_attr: Option<String>,
-    base_attr: Option<String>,
-    levels_attr: Option<String>,
-    storey_height: f64,
-    lod: Option<String>,
-) -> ReadOptions {
-    ReadOptions {
-        height_attr,
-        base_attr,
-        levels_attr,
-        storey_height,
-        lod,
-        ..ReadOptions::default()
+/// The reader options of a dict whose keys are the CLI's reader flags in snake case
+/// (`height_attr`, `base_attr`, `levels_attr`, `storey_height`, `lod`, `on_bad_height`,
+/// `default_height`, `types`, `min_height_attr`, `min_levels_attr`, `crs`), checked as the CLI
+/// checks them; a missing key or None keeps the CLI's default, an unknown key is an error.
+fn read_options(d: Option<&Bound<'_, PyDict>>) -> PyResult<ReadOptions> {
+    let mut o = ReadOptions::default();
+    let Some(d) = d else { return Ok(o) };
+    let positive = |k: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(VoccError::new_err(format!(
+                "{k} must be a number greater than 0, got {v}"
+            )))
+        }
+    };
+    for (k, v) in d.iter() {
+        let key: String = k.extract()?;
+        if v.is_none() {
+            // None: the default; for the two bottom attributes, none read (the CLI's "").
+            match key.as_str() {
+                "min_height_attr" => o.min_height_attr = None,
+                "min_levels_attr" => o.min_levels_attr = None,
+                _ => {}
+            }
+            continue;
+        }
+        let text = |v: &Bound<'_, PyAny>| -> PyResult<Option<String>> {
+            let s: String = v.extract()?;
+            Ok(Some(s).filter(|s| !s.is_empty()))
+        };
+        match key.as_str() {
+            "height_attr" => o.height_attr = text(&v)?,
+            "base_attr" => o.base_attr = text(&v)?,
+            "levels_attr" => o.levels_attr = text(&v)?,
+            "lod" => o.lod = text(&v)?,
+            "crs" => o.crs = text(&v)?,
+            "min_height_attr" => o.min_height_attr = text(&v)?,
+            "min_levels_attr" => o.min_levels_attr = text(&v)?,
+            "storey_height" => o.storey_height = positive(&key, v.extract()?)?,
+            "default_height" => o.default_height = Some(positive(&key, v.extract()?)?),
+            "on_bad_height" => {
+                let s: String = v.extract()?;
+                o.on_bad_height = match s.as_str() {
+                    "skip" => OnBadHeight::Skip,
+                    "error" => OnBadHeight::Error,
+                    _ => {
+                        return Err(VoccError::new_err(format!(
+                            "on_bad_height must be \"skip\" or \"error\", got {s:?}"
+                        )))
+                    }
+                }
+            }
+            "types" => {
+                let t: Vec<String> = v.extract()?;
+                o.types = t.iter().map(|t| t.trim().to_string()).collect();
+            }
+            _ => return Err(VoccError::new_err(format!("unknown reader option {key:?}"))),
+        }
     }
+    Ok(o)
+}
+
+/// The bake summary as JSON, in `vocc info`'s words for the scene (as `vocc bake --json`):
+/// `convex_pieces`, `blocker_objects`, `no_blocker_objects`.
+fn summary_json(sum: &vocc::bake::job::BakeSummary) -> Result<String, serde_json::Error> {
+    let mut v = serde_json::to_value(sum)?;
+    if let Some(sc) = v.get_mut("scene").and_then(|s| s.as_object_mut()) {
+        let objects = sc.get("objects").and_then(|x| x.as_u64()).unwrap_or(0);
+        if let Some(b) = sc.remove("blockers") {
+            sc.insert("convex_pieces".into(), b);
+        }
+        if let Some(n) = sc.remove("no_blocker") {
+            let none = n.as_u64().unwrap_or(0);
+            sc.insert(
+                "blocker_objects".into(),
+                objects.saturating_sub(none).into(),
+            );
+            sc.insert("no_blocker_objects".into(), n);
+        }
+    }
+    serde_json::to_string(&v)
 }
 
 fn load(py: Python<'_>, paths: Vec<PathBuf>, opts: ReadOptions) -> PyResult<scene::Scene> {
@@ -72,28 +143,43 @@ fn f64_bytes<'py>(py: Python<'py>, v: impl IntoIterator<Item = f64>) -> Bound<'p
     PyBytes::new(py, &b)
 }
 
-/// The world boxes of a scene's objects, `6 * n` little-endian f64 (xmin, ymin, zmin, xmax,
-/// ymax, zmax per object, in object order, the order `vocc pvs` numbers objects in).
+/// A scene's object boxes and what identifies it: `(boxes, ids, (objects, fingerprint, crs,
+/// skipped))`. `boxes` is `6 * n` little-endian f64 (world xmin, ymin, zmin, xmax, ymax, zmax per
+/// object, in object order), `ids` `n` little-endian u32 (each object's input feature number,
+/// the number `vocc pvs` and `vocc info` give), then the facts a store's scene section is
+/// checked against.
 #[pyfunction]
-#[pyo3(signature = (paths, height_attr=None, base_attr=None, levels_attr=None, storey_height=3.0, lod=None))]
+#[pyo3(signature = (paths, read=None))]
+#[allow(clippy::type_complexity)]
 fn scene_boxes<'py>(
     py: Python<'py>,
     paths: Vec<PathBuf>,
-    height_attr: Option<String>,
-    base_attr: Option<String>,
-    levels_attr: Option<String>,
-    storey_height: f64,
-    lod: Option<String>,
-) -> PyResult<Bound<'py, PyBytes>> {
-    let opts = read_options(height_attr, base_attr, levels_attr, storey_height, lod);
+    read: Option<&Bound<'py, PyDict>>,
+) -> PyResult<(
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    (u64, u64, String, u64),
+)> {
+    let opts = read_options(read)?;
     let s = load(py, paths, opts)?;
     let o = s.origin;
-    Ok(f64_bytes(
+    let boxes = f64_bytes(
         py,
         s.objects.iter().flat_map(|ob| {
             let (a, b) = (ob.bbox.min + o, ob.bbox.max + o);
             [a.x, a.y, a.z, b.x, b.y, b.z]
         }),
+    );
+    let ids: Vec<u8> = s
+        .objects
+        .iter()
+        .flat_map(|ob| ob.feature.to_le_bytes())
+        .collect();
+    let f = SceneFacts::of(&s);
+    Ok((
+        boxes,
+        PyBytes::new(py, &ids),
+        (f.objects, f.fingerprint, f.crs, f.skipped),
     ))
 }
 
@@ -103,19 +189,14 @@ fn scene_boxes<'py>(
 /// between calls); an exception it raises stops further calls and is raised when the bake ends.
 #[pyfunction]
 #[pyo3(signature = (
-    paths, height_attr=None, base_attr=None, levels_attr=None, storey_height=3.0, lod=None,
-    cell_size=100.0, eye=(1.5, 2.0), slices=None, max_vos=10, region=None, threads=None,
-    effort="default", progress=None
+    paths, read=None, cell_size=100.0, eye=(1.5, 2.0), slices=None, max_vos=10, region=None,
+    threads=None, effort="default", progress=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn bake<'py>(
     py: Python<'py>,
     paths: Vec<PathBuf>,
-    height_attr: Option<String>,
-    base_attr: Option<String>,
-    levels_attr: Option<String>,
-    storey_height: f64,
-    lod: Option<String>,
+    read: Option<&Bound<'py, PyDict>>,
     cell_size: f64,
     eye: (f64, f64),
     slices: Option<u8>,
@@ -125,7 +206,7 @@ fn bake<'py>(
     effort: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)> {
-    let opts = read_options(height_attr, base_attr, levels_attr, storey_height, lod);
+    let opts = read_options(read)?;
     let s = load(py, paths, opts)?;
     let o = s.origin;
     let params = BakeParams {
@@ -189,7 +270,7 @@ fn bake<'py>(
     if let Some(e) = callback_error {
         return Err(e);
     }
-    let summary = serde_json::to_string(&out.summary).map_err(lib_err)?;
+    let summary = summary_json(&out.summary).map_err(lib_err)?;
     Ok((
         PyBytes::new(py, &out.store),
         PyBytes::new(py, &out.hashes),
@@ -284,6 +365,35 @@ impl RawStore {
     fn scene(&self) -> (u32, u64, String) {
         let s = self.store.scene_section();
         (s.objects, s.scene, s.crs.to_string())
+    }
+
+    /// Checks a scene's facts (`scene_boxes`' last item) against the store's scene section:
+    /// `("same", "")`, `("not_recorded", message)` (a 1.0 store: the check could not be made) or
+    /// `("differs", message naming what differs and the likely cause)`.
+    fn check_scene(
+        &self,
+        objects: u64,
+        fingerprint: u64,
+        crs: String,
+        skipped: u64,
+    ) -> (&'static str, String) {
+        let facts = SceneFacts {
+            objects,
+            fingerprint,
+            crs,
+            skipped,
+        };
+        match check::check(&self.store.scene_section(), &facts) {
+            SceneCheck::Same => ("same", String::new()),
+            SceneCheck::NotRecorded => {
+                let (major, minor) = self.store.version();
+                (
+                    "not_recorded",
+                    format!("the store ({major}.{minor}) records no scene, so whether these boxes are of the scene baked could not be checked"),
+                )
+            }
+            SceneCheck::Differs(m) => ("differs", m.to_string()),
+        }
     }
 
     /// The cell holding local position (x, y), or None.

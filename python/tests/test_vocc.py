@@ -1,7 +1,8 @@
 """The Python package against the vocc command line on the bundled Lyon data: a bake gives the
-CLI's bytes, a saved store reopens to the same bytes, the PVS equals `vocc pvs --json`, the VOs
-equal `vocc inspect --cell --json`, errors carry the library's message, the bake releases the GIL
-and reports progress. The CLI binary is $VOCC_BIN (default: target/debug/vocc of this checkout).
+CLI's bytes, a saved store reopens to the same bytes, the PVS equals `vocc pvs --json` (input
+feature numbers, ids beside the boxes as `vocc boxes` writes them), the reader options are the
+CLI's, a scene that is not the one baked is refused, the VOs equal `vocc inspect --cell --json`,
+errors carry the library's message, the bake releases the GIL and reports progress. The CLI binary is $VOCC_BIN (default: target/debug/vocc of this checkout).
 
 A 300 m square of Lyon is baked (the cells around the README's sample cell) to keep the test
 short; the region is the same for the CLI and for Python.
@@ -12,6 +13,7 @@ import os
 import subprocess
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -137,7 +139,7 @@ def test_the_store_records_its_version_and_scene(baked):
     assert store.version == (2, 0)
     assert store.objects == want["objects"] == 2576
     assert store.scene == int(want["scene"], 16) != 0
-    assert store.crs == want["crs"] == ""
+    assert store.crs == want["crs"] == "EPSG:3946"
 
 
 def doc_hex(name):
@@ -211,3 +213,135 @@ def test_the_bake_releases_the_gil():
     # With the GIL held for the whole bake the counter would stand still; released, it ticks
     # about once a millisecond (at least a few times per 50 ms on a loaded machine).
     assert ticks >= max(5, elapsed * 20), f"{ticks} ticks in {elapsed:.2f} s"
+
+
+def cli_boxes(out, path, *flags):
+    """`vocc boxes` of a scene into the file `out`: (ids, boxes, the "# scene" line)."""
+    subprocess.run([VOCC, "boxes", str(path), *flags, "-o", str(out)], check=True, capture_output=True)
+    lines = out.read_text().splitlines()
+    rows = [[float(v) for v in l.split()] for l in lines if not l.startswith("#")]
+    scene = next(l for l in lines if l.startswith("# scene "))
+    return [int(r[0]) for r in rows], [r[1:] for r in rows], scene
+
+
+def test_three_numberings_pvs_gives_input_feature_numbers_with_ids_beside_the_boxes(tmp_path):
+    # Issue 33, defect 2: scene_boxes and Store.pvs gave positions among loaded objects while
+    # vocc pvs gives input feature numbers. With --base-attr Z_MIN_SOL five Lyon features are
+    # skipped (feature 13 first): the ids skip them, as vocc boxes's do, and the PVS is vocc pvs's.
+    flags = dict(height_attr="HAUTEUR", base_attr="Z_MIN_SOL")
+    scene = vocc.scene_boxes(LYON, **flags)
+    assert len(scene) == scene.objects == 2571 and scene.skipped == 5
+    assert 13 not in scene.ids.tolist() and scene.ids[-1] == 2575
+    ids, boxes, line = cli_boxes(tmp_path / "lyon.boxes", LYON, "--height-attr", "HAUTEUR", "--base-attr", "Z_MIN_SOL")
+    assert scene.ids.tolist() == ids
+    assert scene.boxes.tolist() == boxes
+    assert line.startswith(f"# scene {scene.fingerprint:016x} objects 2571 crs \"EPSG:3946\"")
+    store = vocc.bake([LYON], region=SMALL, progress=False, **flags)
+    path = tmp_path / "base.vocc"
+    store.save(path)
+    cell = store.cell_at(1842050.0, 5176050.0)
+    want = json.loads(cli(
+        "pvs", str(path), str(LYON), "--height-attr", "HAUTEUR", "--base-attr", "Z_MIN_SOL",
+        "--cell", str(cell), "--json",
+    ))
+    got = store.pvs(cell, scene)
+    assert got.tolist() == want["pvs"] and len(got) < 2571
+    assert store.pvs(cell, store.tree(scene)).tolist() == want["pvs"]
+    # An engine's own array: positions in it.
+    assert scene.ids[store.pvs(cell, scene.boxes)].tolist() == want["pvs"]
+
+
+ROW = {
+    "type": "FeatureCollection",
+    "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::3946"}},
+    "features": [
+        {"type": "Feature", "properties": {"h": None},
+         "geometry": {"type": "Polygon", "coordinates": [[[1842000, 5176000], [1842010, 5176000], [1842010, 5176010], [1842000, 5176010], [1842000, 5176000]]]}},
+        {"type": "Feature", "properties": {"h": "tall"},
+         "geometry": {"type": "Polygon", "coordinates": [[[1842020, 5176000], [1842030, 5176000], [1842030, 5176010], [1842020, 5176010], [1842020, 5176000]]]}},
+        {"type": "Feature", "properties": {"h": None, "levels": 4},
+         "geometry": {"type": "Polygon", "coordinates": [[[1842040, 5176000], [1842050, 5176000], [1842050, 5176010], [1842040, 5176010], [1842040, 5176000]]]}},
+        {"type": "Feature", "properties": {"h": 9},
+         "geometry": {"type": "Polygon", "coordinates": [[[1842060, 5176000], [1842070, 5176000], [1842070, 5176010], [1842060, 5176010], [1842060, 5176000]]]}},
+    ],
+}
+
+BRIDGE = {
+    "type": "CityJSON", "version": "2.0", "transform": {"scale": [1, 1, 1], "translate": [0, 0, 0]},
+    "vertices": [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [0, 0, 8], [10, 0, 8], [10, 10, 8], [0, 10, 8]],
+    "CityObjects": {
+        t: {"type": t, "geometry": [{"type": "Solid", "lod": "1", "boundaries": [[
+            [[0, 3, 2, 1]], [[4, 5, 6, 7]], [[0, 1, 5, 4]], [[1, 2, 6, 5]], [[2, 3, 7, 6]], [[3, 0, 4, 7]]]]}]}
+        for t in ["Building", "Bridge"]
+    },
+}
+
+
+def test_reader_options_are_the_clis_default_height_on_bad_height_types_levels_attr(tmp_path):
+    # Issue 33, defect 3: Python lacked the reader options its docs promised ("same options,
+    # same bytes"). Each gives what the same CLI flag gives.
+    row = tmp_path / "row.geojson"
+    row.write_text(json.dumps(ROW))
+    flags = ["--height-attr", "h", "--levels-attr", "levels", "--default-height", "5"]
+    opts = dict(height_attr="h", levels_attr="levels", default_height=5)
+    scene = vocc.scene_boxes(row, **opts)
+    out = tmp_path / "row.boxes"
+    ids, boxes, line = cli_boxes(out, row, *flags)
+    assert scene.ids.tolist() == ids == [0, 1, 2, 3]
+    assert scene.boxes.tolist() == boxes
+    assert [b[5] for b in boxes] == [5.0, 5.0, 12.0, 9.0]
+    assert line == f'# scene {scene.fingerprint:016x} objects 4 crs "EPSG:3946"'
+    # Without the fallbacks, features 0 and 1 are skipped and the ids say so.
+    assert vocc.scene_boxes(row, height_attr="h", levels_attr="levels").ids.tolist() == [2, 3]
+    with pytest.raises(vocc.VoccError, match=r'"tall", which is not a number'):
+        vocc.scene_boxes(row, on_bad_height="error", **opts)
+    with pytest.raises(vocc.VoccError, match="on_bad_height must be"):
+        vocc.scene_boxes(row, on_bad_height="maybe", **opts)
+    with pytest.raises(vocc.VoccError, match="storey_height must be a number greater than 0"):
+        vocc.scene_boxes(row, storey_height=-3, **opts)
+    # --crs: the scene projected, as the CLI's.
+    projected = vocc.scene_boxes(row, crs="EPSG:2154", **opts)
+    assert projected.crs == "EPSG:2154"
+    assert projected.boxes.tolist() == cli_boxes(out, row, *flags, "--crs", "EPSG:2154")[1]
+    # --types: a CityJSON Bridge is read only when asked for.
+    city = tmp_path / "bridge.city.json"
+    city.write_text(json.dumps(BRIDGE))
+    assert len(vocc.scene_boxes(city)) == 1
+    both = vocc.scene_boxes(city, types=["Bridge"])
+    assert both.ids.tolist() == cli_boxes(out, city, "--types", "Bridge")[0] == [0, 1]
+    assert vocc.scene_boxes(city, types="Bridge").ids.tolist() == [0, 1]
+    # The bake with the same options gives the CLI's bytes.
+    store = tmp_path / "row.vocc"
+    cli("bake", str(row), *flags, "--cell-size", "50", "-o", str(store))
+    assert vocc.bake(row, cell_size=50, progress=False, **opts).to_bytes() == store.read_bytes()
+
+
+def test_pvs_with_another_scene_is_refused_naming_what_differs(baked):
+    # Issue 33, defect 4: Python's PVS with a scene that is not the one baked answered silently.
+    store, _, _ = baked
+    other = vocc.scene_boxes(LYON, height_attr="HAUTEUR", base_attr="Z_MIN_SOL")
+    cell = store.cell_at(1842000.0, 5176050.0)
+    with pytest.raises(vocc.VoccError, match=r"2571 objects where 2576 were baked, fingerprint .*; likely other reader flags: 5 features were skipped here"):
+        store.pvs(cell, other)
+    with pytest.warns(UserWarning, match="not the one the store was baked from"):
+        store.pvs(cell, other, allow_other_scene=True)
+    # A 1.0 store records no scene: a warning says the check could not be made.
+    old = vocc.Store.from_bytes(doc_hex("store-1.0"))
+    with pytest.warns(UserWarning, match=r"records no scene, so whether .* could not be checked"):
+        old.pvs(0, other)
+    # The same scene: no warning.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        store.pvs(cell, vocc.scene_boxes(LYON, height_attr="HAUTEUR"))
+
+
+def test_bake_summary_counts_convex_pieces_and_blocker_objects_as_info_does(baked):
+    # Issue 33, defect 8: the bake's summary called convex pieces "blockers" while info counts
+    # objects; one vocabulary now.
+    store, _, _ = baked
+    info = json.loads(cli("info", str(LYON), "--height-attr", "HAUTEUR", "--json"))
+    sc = store.summary["scene"]
+    assert "blockers" not in sc and "no_blocker" not in sc
+    assert sc["convex_pieces"] == info["convex_pieces"]
+    assert sc["blocker_objects"] == info["blocker_objects"]
+    assert sc["no_blocker_objects"] == info["no_blocker_objects"]

@@ -1,8 +1,8 @@
 """vocc: virtual occluders for city models, from Python.
 
-Bake city models (GeoJSON footprints with heights, CityJSON, OBJ) into an occluder store, read
-stores, and build a view cell's potentially visible set (PVS) from object boxes, with the same
-library the ``vocc`` command line uses::
+Bake city models (every format ``vocc bake`` reads, with the same reader options) into an
+occluder store, read stores, and build a view cell's potentially visible set (PVS) from object
+boxes, with the same library the ``vocc`` command line uses::
 
     import vocc
     store = vocc.bake(["buildings.geojson"], height_attr="HAUTEUR", cell_size=100)
@@ -10,10 +10,15 @@ library the ``vocc`` command line uses::
     store = vocc.Store.open("city.vocc")
     cell = store.cell_at(1842000.0, 5176050.0)   # world coordinates; None outside the grid
     vos = store.vos(cell)                        # numpy arrays: a, b (n x 2), bottom, top, ...
-    boxes = vocc.scene_boxes(["buildings.geojson"], height_attr="HAUTEUR")  # n x 6, world
-    visible = store.pvs(cell, boxes)             # numpy uint32 object indices, ascending
+    scene = vocc.scene_boxes(["buildings.geojson"], height_attr="HAUTEUR")  # boxes and ids
+    visible = store.pvs(cell, scene)             # input feature numbers, ascending (vocc pvs's)
 
-Coordinates are world coordinates unless a name says local (local = world - origin). Library
+One numbering: a scene's objects are named by input feature number (their position among the
+files' features, skipped ones included), as ``vocc pvs``, ``vocc info`` and ``vocc boxes`` name
+them; ``scene.ids`` holds them beside ``scene.boxes``. ``Store.pvs`` over a ``SceneBoxes`` gives
+these ids, and checks the scene against the one the store was baked from; over an engine's own
+n x 6 array it gives positions in that array. Coordinates are world coordinates unless a name
+says local (local = world - origin). Library
 errors (a bad file, option or store) raise ``vocc.VoccError`` with the library's message; file
 errors raise ``OSError``. The bake and scene loading release the GIL. Docs: docs/EMBEDDING.md.
 """
@@ -21,6 +26,7 @@ errors raise ``OSError``. The bake and scene loading release the GIL. Docs: docs
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Callable, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -29,7 +35,7 @@ from . import _vocc
 from ._vocc import VoccError
 
 __version__ = _vocc.__version__
-__all__ = ["bake", "scene_boxes", "Store", "BakedStore", "BoxTree", "VOs", "VoccError"]
+__all__ = ["bake", "scene_boxes", "SceneBoxes", "Store", "BakedStore", "BoxTree", "VOs", "VoccError"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 Progress = Callable[[int, int], object]
@@ -48,6 +54,71 @@ def _boxes_array(boxes) -> np.ndarray:
     return a
 
 
+def _read(
+    height_attr=None,
+    base_attr=None,
+    levels_attr=None,
+    storey_height=3.0,
+    lod=None,
+    on_bad_height="skip",
+    default_height=None,
+    types=(),
+    min_height_attr="min_height",
+    min_levels_attr="building:min_level",
+    crs=None,
+) -> dict:
+    """The reader options as the native module takes them (the CLI's reader flags)."""
+    if isinstance(types, str):
+        types = types.split(",")
+    return {
+        "height_attr": height_attr,
+        "base_attr": base_attr,
+        "levels_attr": levels_attr,
+        "storey_height": float(storey_height),
+        "lod": None if lod is None else str(lod),
+        "on_bad_height": on_bad_height,
+        "default_height": None if default_height is None else float(default_height),
+        "types": [str(t) for t in types],
+        "min_height_attr": min_height_attr,
+        "min_levels_attr": min_levels_attr,
+        "crs": crs,
+    }
+
+
+_READER_DOC = """
+    Reader options, the ``vocc`` reader flags by the same names (README, "Reader flags"):
+    ``height_attr``, ``base_attr``, ``levels_attr`` (attribute names), ``storey_height`` (metres
+    per storey, default 3), ``lod`` (CityJSON and CityGML level of detail), ``on_bad_height``
+    (``"skip"``, the default, or ``"error"``), ``default_height`` (metres, for features with no
+    usable height), ``types`` (CityJSON city object types read besides buildings, a list or a
+    comma-separated string), ``min_height_attr`` and ``min_levels_attr`` (the bottom of a part
+    standing on others; defaults ``"min_height"`` and ``"building:min_level"``, None reads
+    none), ``crs`` (``"EPSG:N"``, the metric CRS to put the scene in)."""
+
+
+class SceneBoxes:
+    """A scene's objects as an engine sees them: ``boxes`` (n x 6 float64: xmin, ymin, zmin,
+    xmax, ymax, zmax, world coordinates, in object order) and beside them ``ids`` (n uint32: each
+    object's input feature number, as ``vocc pvs``, ``vocc info`` and ``vocc boxes`` give it;
+    skipped features keep their number, so ids may have gaps). ``objects``, ``fingerprint`` and
+    ``crs`` identify the scene as a store's scene section does, and ``skipped`` counts the
+    features the readers skipped. Usable wherever an n x 6 array is (``np.asarray(scene)``)."""
+
+    def __init__(self, boxes: np.ndarray, ids: np.ndarray, facts: tuple):
+        self.boxes = boxes
+        self.ids = ids
+        self.objects, self.fingerprint, self.crs, self.skipped = facts
+
+    def __len__(self) -> int:
+        return len(self.boxes)
+
+    def __array__(self, dtype=None, copy=None):
+        return self.boxes if dtype is None else self.boxes.astype(dtype)
+
+    def _facts(self) -> tuple:
+        return (self.objects, self.fingerprint, self.crs, self.skipped)
+
+
 def scene_boxes(
     paths: Union[PathLike, Sequence[PathLike]],
     *,
@@ -56,11 +127,28 @@ def scene_boxes(
     levels_attr: Optional[str] = None,
     storey_height: float = 3.0,
     lod: Optional[str] = None,
-) -> np.ndarray:
-    """The bounding boxes of a scene's objects: an n x 6 float64 array (xmin, ymin, zmin, xmax,
-    ymax, zmax; world coordinates), in object order, the order PVS indices refer to."""
-    raw = _vocc.scene_boxes(_paths(paths), height_attr, base_attr, levels_attr, storey_height, lod)
-    return np.frombuffer(raw, dtype="<f8").reshape(-1, 6).copy()
+    on_bad_height: str = "skip",
+    default_height: Optional[float] = None,
+    types: Union[str, Sequence[str]] = (),
+    min_height_attr: Optional[str] = "min_height",
+    min_levels_attr: Optional[str] = "building:min_level",
+    crs: Optional[str] = None,
+) -> SceneBoxes:
+    """Loads scene files, as ``vocc boxes`` does: a ``SceneBoxes`` with each object's box and,
+    beside it, its input feature number. Give the reader options of the bake, so that the scene
+    is the one baked (``Store.pvs`` checks it).
+    """
+    read = _read(height_attr, base_attr, levels_attr, storey_height, lod, on_bad_height,
+                 default_height, types, min_height_attr, min_levels_attr, crs)
+    raw, ids, facts = _vocc.scene_boxes(_paths(paths), read)
+    return SceneBoxes(
+        np.frombuffer(raw, dtype="<f8").reshape(-1, 6).copy(),
+        np.frombuffer(ids, dtype="<u4").copy(),
+        facts,
+    )
+
+
+scene_boxes.__doc__ += _READER_DOC
 
 
 class VOs(NamedTuple):
@@ -81,13 +169,16 @@ class VOs(NamedTuple):
 
 
 class BoxTree:
-    """The box hierarchy over object boxes (n x 6, world coordinates) for one store's frame.
-    Build it once per scene and pass it to ``Store.pvs`` instead of the array to save the build
-    on every query."""
+    """The box hierarchy over object boxes (a ``SceneBoxes``, or n x 6 world coordinates) for
+    one store's frame. Build it once per scene and pass it to ``Store.pvs`` instead of the boxes
+    to save the build on every query; built from a ``SceneBoxes``, it keeps the ids and the
+    scene's facts."""
 
     def __init__(self, boxes, store: "Store"):
         self._origin = store.frame["origin"]
-        self._raw = _vocc.RawTree(_boxes_array(boxes), tuple(self._origin))
+        self._scene = boxes if isinstance(boxes, SceneBoxes) else None
+        array = boxes.boxes if self._scene is not None else boxes
+        self._raw = _vocc.RawTree(_boxes_array(array), tuple(self._origin))
 
     def __len__(self) -> int:
         return len(self._raw)
@@ -191,15 +282,45 @@ class Store:
         """A ``BoxTree`` over ``boxes`` (n x 6, world) in this store's frame."""
         return BoxTree(boxes, self)
 
-    def pvs(self, cell: int, boxes: Union[np.ndarray, BoxTree]) -> np.ndarray:
-        """The PVS of ``cell``: the ascending indices (uint32) of the boxes that no VO of the cell
-        hides. ``boxes`` is an n x 6 array of world boxes, or a ``BoxTree`` built for this
-        store. A skipped cell or a cell without VOs keeps every box."""
+    def check_scene(self, scene: "SceneBoxes", *, allow_other_scene: bool = False) -> None:
+        """Checks that ``scene`` is the scene this store was baked from (its scene section:
+        object count, fingerprint, CRS), as ``vocc pvs`` does: ``VoccError`` naming what differs
+        and the likely cause (other reader options, another CRS, another file), or with
+        ``allow_other_scene=True`` a warning. A 1.0 store records no scene: a warning says the
+        check could not be made."""
+        status, message = self._raw.check_scene(*scene._facts())
+        if status == "not_recorded":
+            warnings.warn(message, stacklevel=3)
+        elif status == "differs":
+            if not allow_other_scene:
+                raise VoccError(
+                    message + ". Give the files and reader options of the bake (or allow_other_scene=True)"
+                )
+            warnings.warn(message + "; its PVSs are not guaranteed", stacklevel=3)
+
+    def pvs(
+        self,
+        cell: int,
+        boxes: Union["SceneBoxes", np.ndarray, BoxTree],
+        *,
+        allow_other_scene: bool = False,
+    ) -> np.ndarray:
+        """The PVS of ``cell`` (uint32, ascending): the objects that no VO of the cell hides.
+        ``boxes`` is a ``SceneBoxes`` (then the PVS holds their input feature numbers, the ids
+        ``vocc pvs`` prints, and the scene is checked against the one baked: see
+        ``check_scene``), an engine's own n x 6 array of world boxes (then the PVS holds
+        positions in that array), or a ``BoxTree`` built for this store from either. A skipped
+        cell or a cell without VOs keeps every box."""
         if not isinstance(boxes, BoxTree):
             boxes = BoxTree(boxes, self)
         elif tuple(boxes._origin) != tuple(self._frame["origin"]):
             raise ValueError("the BoxTree was built for a store with another origin")
-        return np.frombuffer(self._raw.pvs(int(cell), boxes._raw), dtype="<u4").copy()
+        if boxes._scene is not None:
+            self.check_scene(boxes._scene, allow_other_scene=allow_other_scene)
+        positions = np.frombuffer(self._raw.pvs(int(cell), boxes._raw), dtype="<u4")
+        if boxes._scene is not None:
+            return boxes._scene.ids[positions]
+        return positions.copy()
 
 
 class BakedStore(Store):
@@ -250,6 +371,12 @@ def bake(
     levels_attr: Optional[str] = None,
     storey_height: float = 3.0,
     lod: Optional[str] = None,
+    on_bad_height: str = "skip",
+    default_height: Optional[float] = None,
+    types: Union[str, Sequence[str]] = (),
+    min_height_attr: Optional[str] = "min_height",
+    min_levels_attr: Optional[str] = "building:min_level",
+    crs: Optional[str] = None,
     cell_size: float = 100.0,
     eye: tuple = (1.5, 2.0),
     slices: Optional[int] = None,
@@ -268,6 +395,9 @@ def bake(
     None (the default) shows a tqdm bar when tqdm is installed; False shows nothing. The GIL is
     released while the bake runs. A KeyboardInterrupt (or an exception from the callback) is
     raised when the bake has finished: the bake itself cannot be stopped midway.
+
+    ``BakedStore.summary`` holds the fields of ``vocc bake --json`` (in its words: the scene's
+    ``convex_pieces``, ``blocker_objects``, ...), but the file names and the load time.
     """
     bar = None
     if progress is None:
@@ -275,13 +405,11 @@ def bake(
     elif progress is False or progress is True:
         progress, bar = _tqdm_progress() if progress else (None, None)
     try:
+        read = _read(height_attr, base_attr, levels_attr, storey_height, lod, on_bad_height,
+                     default_height, types, min_height_attr, min_levels_attr, crs)
         store, hashes, summary = _vocc.bake(
             _paths(paths),
-            height_attr,
-            base_attr,
-            levels_attr,
-            storey_height,
-            lod,
+            read,
             float(cell_size),
             (float(eye[0]), float(eye[1])),
             slices,
@@ -297,3 +425,6 @@ def bake(
     import json
 
     return BakedStore(_vocc.RawStore(store), hashes, json.loads(summary))
+
+
+bake.__doc__ += _READER_DOC

@@ -5,6 +5,7 @@
 //! Invariant: every numeric option is parsed here, by one rule (finite numbers, ranges checked
 //! at parse time), so a bad value is a usage error (exit status 2) whatever the option.
 
+use clap::error::ErrorKind;
 use clap::Args;
 
 use vocc::bake::params::{Effort, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
@@ -60,6 +61,49 @@ pub struct ReadArgs {
     pub crs: Option<String>,
 }
 
+/// A usage error found after parsing (a missing or conflicting argument that clap's
+/// declarations cannot express), raised before anything is read; `main` prints it as clap
+/// prints its own, with the command's usage, and exits with status 2.
+#[derive(Debug)]
+pub struct UsageError {
+    /// The subcommand whose usage is shown.
+    pub command: &'static str,
+    pub kind: ErrorKind,
+    pub message: String,
+}
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// A [`UsageError`] of `command`, as an `anyhow::Error`.
+pub fn usage(
+    command: &'static str,
+    kind: ErrorKind,
+    message: impl std::fmt::Display,
+) -> anyhow::Error {
+    anyhow::Error::new(UsageError {
+        command,
+        kind,
+        message: message.to_string(),
+    })
+}
+
+/// Checking a scene against the one a store was baked from (`pvs`, `eval`, `render`,
+/// `inspect --list-cells`).
+#[derive(Args, Clone, Copy, Debug)]
+pub struct SceneCheckArgs {
+    /// Go on when the scene is not the one the store was baked from (its object count,
+    /// fingerprint or CRS differ), with a warning instead of an error. A PVS over another scene
+    /// is not guaranteed: the store's VOs were certified against the blockers baked.
+    #[arg(long)]
+    pub allow_other_scene: bool,
+}
+
 /// `--on-bad-height`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum OnBadHeightArg {
@@ -85,6 +129,31 @@ impl ReadArgs {
             min_levels_attr: Some(self.min_levels_attr.clone()).filter(|s| !s.is_empty()),
             crs: self.crs.clone(),
         }
+    }
+}
+
+/// `bake --shard`: shard I of N, or `auto` (the index from the job array's environment).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShardSpec {
+    Fixed(u32, u32),
+    Auto,
+}
+
+/// Parses `I/N` (0 <= I < N) or `auto`.
+pub fn parse_shard(s: &str) -> Result<ShardSpec, String> {
+    if s == "auto" {
+        return Ok(ShardSpec::Auto);
+    }
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("expected I/N or auto, got {s:?}"))?;
+    let num = |t: &str| t.trim().parse::<u32>().ok();
+    match (num(i), num(n)) {
+        (Some(i), Some(n)) if i < n => Ok(ShardSpec::Fixed(i, n)),
+        (Some(i), Some(n)) => Err(format!(
+            "the shard index {i} is not below the shard count {n} (shards are numbered 0 to N - 1)"
+        )),
+        _ => Err(format!("expected I/N with whole numbers, got {s:?}")),
     }
 }
 

@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use clap::error::ErrorKind;
 use clap::Args;
 
 use vocc::bake::incremental::hashes_path;
@@ -18,16 +19,18 @@ use vocc::scene;
 
 use crate::args::{
     parse_cell_size, parse_count, parse_count_u32, parse_effort, parse_eye, parse_generator,
-    parse_max_vos, parse_rect, parse_slices, ReadArgs,
+    parse_max_vos, parse_rect, parse_shard, parse_slices, ReadArgs, ShardSpec,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::progress::Progress;
+use crate::report::plural;
 
 #[derive(Args)]
 #[command(after_help = "Examples:
   vocc bake data/lyon1/buildings_lyon1.geojson --height-attr HAUTEUR -o lyon.vocc
   vocc bake city.geojson --height-attr height --cell-size 50 --region 1841900,5175950,1842300,5176250 -o part.vocc
   vocc bake city-v2.geojson --height-attr height --reuse city-v1.vocc -o city-v2.vocc --json
+  vocc bake city.geojson --height-attr height --walkable streets.geojson -o walkable.vocc
   vocc bake city.geojson --height-attr height --shard auto --shard-count 16 -o shard.vocc")]
 pub struct BakeArgs {
     /// Scene files: GeoJSON, GeoPackage, FlatGeobuf or Shapefile footprints, OpenStreetMap PBF,
@@ -52,7 +55,8 @@ pub struct BakeArgs {
     /// Most VOs per cell (1 to 10).
     #[arg(long, default_value_t = 10, value_parser = parse_max_vos)]
     pub max_vos: usize,
-    /// Worker threads (default: all cores). The output does not depend on it.
+    /// Worker threads (default: all cores). The output does not depend on it; more threads
+    /// than cores only share them (a note says so).
     #[arg(long, value_parser = parse_count, value_name = "N")]
     pub threads: Option<usize>,
     /// Bake only the cells meeting this world rectangle X0,Y0,X1,Y1 (the others stay empty).
@@ -63,15 +67,15 @@ pub struct BakeArgs {
     /// Kubernetes Indexed Job (`JOB_COMPLETION_INDEX`) or AWS Batch (`AWS_BATCH_JOB_ARRAY_INDEX`),
     /// the count from `--shard-count` when the engine does not give it. `vocc merge` joins the
     /// shards into the store a single bake writes, byte for byte.
-    #[arg(long, value_name = "I/N|auto")]
-    pub shard: Option<String>,
+    #[arg(long, value_name = "I/N|auto", value_parser = parse_shard)]
+    pub shard: Option<ShardSpec>,
     /// The number of shards, for `--shard auto` under Kubernetes or AWS Batch.
-    #[arg(long, value_name = "N", value_parser = parse_count_u32)]
+    #[arg(long, value_name = "N", value_parser = parse_count_u32, requires = "shard")]
     pub shard_count: Option<u32>,
     /// Bake only the cells meeting the polygons of this GeoJSON (the walkable area, world
-    /// coordinates); the others stay empty.
-    #[arg(long, value_name = "GEOJSON")]
-    pub cells: Option<PathBuf>,
+    /// coordinates); the others stay empty. (`--cells FILE`, its old spelling, still works.)
+    #[arg(long, alias = "cells", value_name = "GEOJSON")]
+    pub walkable: Option<PathBuf>,
     /// Incremental rebake: reuse the records of this older store (and its `.hashes` file, which
     /// every bake writes beside its store) for the cells whose neighbourhood did not change; bake
     /// the rest. The output is byte-identical to a full bake.
@@ -92,9 +96,10 @@ pub struct BakeArgs {
     pub json: bool,
 }
 
-/// Which shard this process bakes: `(index, count)`.
+/// Which shard this process bakes: `(index, count)`. A missing `--shard-count` is a usage
+/// error (exit status 2); an environment that gives no usable index, a run failure.
 pub fn shard(
-    spec: &str,
+    spec: ShardSpec,
     count: Option<u32>,
     env: &dyn Fn(&str) -> Option<String>,
 ) -> Result<(u32, u32)> {
@@ -103,7 +108,9 @@ pub fn shard(
             .parse::<u32>()
             .with_context(|| format!("{what} must be a whole number, got {v:?}"))
     };
-    let (i, n) = if spec == "auto" {
+    let (i, n) = if let ShardSpec::Fixed(i, n) = spec {
+        (i, n)
+    } else {
         let from = [
             "SLURM_ARRAY_TASK_ID",
             "JOB_COMPLETION_INDEX",
@@ -118,16 +125,17 @@ pub fn shard(
         let n = match (count, env("SLURM_ARRAY_TASK_COUNT")) {
             (Some(n), _) => n,
             (None, Some(c)) if var == "SLURM_ARRAY_TASK_ID" => num("SLURM_ARRAY_TASK_COUNT", &c)?,
-            _ => anyhow::bail!(
-                "--shard auto with {var}: give the number of shards with --shard-count N"
-            ),
+            _ => {
+                return Err(crate::args::usage(
+                    "bake",
+                    ErrorKind::MissingRequiredArgument,
+                    format!(
+                        "--shard auto with {var}: give the number of shards with --shard-count N"
+                    ),
+                ))
+            }
         };
         (i, n)
-    } else {
-        let (i, n) = spec
-            .split_once('/')
-            .with_context(|| format!("--shard expects I/N or auto, got {spec:?}"))?;
-        (num("the shard index", i)?, num("the shard count", n)?)
     };
     anyhow::ensure!(
         n >= 1 && i < n,
@@ -140,17 +148,25 @@ pub fn run(a: BakeArgs) -> Result<()> {
     let t0 = Instant::now();
     // Before any work: the outputs can be written and are none of the inputs.
     let mut inputs: Vec<PathBuf> = a.scene.clone();
-    inputs.extend(a.cells.iter().cloned());
+    inputs.extend(a.walkable.iter().cloned());
     if let Some(r) = &a.reuse {
         inputs.extend([r.clone(), hashes_path(r)]);
     }
     let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
     check_output(&a.output, &inputs)?;
     check_output(&hashes_path(&a.output), &inputs)?;
-    let shard = match &a.shard {
+    let shard = match a.shard {
         Some(spec) => Some(shard(spec, a.shard_count, &|k| std::env::var(k).ok())?),
         None => None,
     };
+    if let (Some(n), Ok(cores)) = (a.threads, std::thread::available_parallelism()) {
+        if n > cores.get() {
+            eprintln!(
+                "note: --threads {n} on {}: the extra threads only share them (no faster; the store is the same)",
+                crate::report::plural(cores.get(), "core", "cores")
+            );
+        }
+    }
     let s = scene::load(&a.scene, &a.read.options())?;
     for n in &s.report.notes {
         eprintln!("note: {n}");
@@ -164,7 +180,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
             y1 - s.origin.y,
         ]
     });
-    let walkable = match &a.cells {
+    let walkable = match &a.walkable {
         Some(p) => Some(scene::walkable::read(p, s.origin)?),
         None => None,
     };
@@ -181,7 +197,10 @@ pub fn run(a: BakeArgs) -> Result<()> {
     let mut job = BakeJob::new(&s, params)?;
     if let Some((i, n)) = shard {
         job = job.shard(i, n)?;
-        eprintln!("shard {i}/{n}: {} cells", job.selected()?.len());
+        eprintln!(
+            "shard {i}/{n}: {}",
+            crate::report::plural(job.selected()?.len(), "cell", "cells")
+        );
     }
     if let Some(n) = a.threads {
         job = job.threads(n);
@@ -199,7 +218,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         };
         job = job.reuse(bytes, hashes);
     }
-    let progress = Progress::new("baking", "cells", 0);
+    let progress = Progress::new("baking", ("cell", "cells"), 0);
     let out = job
         .run(&|p: vocc::bake::job::Progress| {
             if p.done == 0 {
@@ -226,9 +245,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
             None => {}
         }
         eprintln!(
-            "incremental: {} of {} cells changed since {}, {} reused",
+            "incremental: {} of {} changed since {}, {} reused",
             r.changed,
-            sum.cells_selected,
+            plural(sum.cells_selected, "cell", "cells"),
             old.display(),
             r.reused
         );
@@ -246,8 +265,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
     write_atomically(&a.output, |w| w.write_all(&out.store))?;
     write_atomically(&hashes_file, |w| w.write_all(&out.hashes))?;
     if a.json {
-        let mut v = serde_json::to_value(sum)?;
+        let mut v = summary_json(sum)?;
         v["load_s"] = load_s.into();
+        crate::report::round_timings(&mut v);
         v["store"] = a.output.display().to_string().into();
         v["hashes"] = hashes_file.display().to_string().into();
         let mut out = std::io::stdout().lock();
@@ -259,18 +279,40 @@ pub fn run(a: BakeArgs) -> Result<()> {
     Ok(())
 }
 
+/// The bake's summary as JSON, in `vocc info`'s words for the scene: `convex_pieces` (all
+/// blockers, convex pieces and walls), `blocker_objects` and `no_blocker_objects` (objects that
+/// gave blockers, and none).
+pub fn summary_json(sum: &BakeSummary) -> Result<serde_json::Value> {
+    let mut v = serde_json::to_value(sum)?;
+    if let Some(sc) = v.get_mut("scene").and_then(|s| s.as_object_mut()) {
+        let objects = sc.get("objects").and_then(|x| x.as_u64()).unwrap_or(0);
+        if let Some(b) = sc.remove("blockers") {
+            sc.insert("convex_pieces".into(), b);
+        }
+        if let Some(n) = sc.remove("no_blocker") {
+            let none = n.as_u64().unwrap_or(0);
+            sc.insert(
+                "blocker_objects".into(),
+                objects.saturating_sub(none).into(),
+            );
+            sc.insert("no_blocker_objects".into(), n);
+        }
+    }
+    Ok(v)
+}
+
 /// The bake's summary, three lines on stderr.
 fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
     let g = &sum.grid;
     eprintln!(
-        "grid {} x {} cells of {} m; baked {} cells ({} skipped: inside a building) in {:.1} s on {} threads (scene loaded in {:.1} s)",
+        "grid {} x {} of {} m; baked {} ({} skipped: inside a building) in {:.1} s on {} (scene loaded in {:.1} s)",
         g.nx,
-        g.ny,
+        plural(g.ny as usize, "cell", "cells"),
         g.cell_size,
-        sum.cells_baked,
+        plural(sum.cells_baked, "cell", "cells"),
         sum.cells_skipped,
         sum.timings.bake_s,
-        sum.threads,
+        plural(sum.threads, "thread", "threads"),
         load_s
     );
     let q = &sum.quantization;
@@ -279,15 +321,15 @@ fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
         _ => "no cell baked".to_string(),
     };
     eprintln!(
-        "VOs: {} in {} cells ({:.2} per cell, at most {}); {ms}; quantization: {} tried, {} shrunk, {} dropped, {} exact checks",
-        sum.vos, sum.cells_selected, sum.vos_per_cell, sum.max_vos, q.tried, q.shrunk, q.dropped, q.checks
+        "VOs: {} in {} ({:.2} per cell, at most {}); {ms}; quantization: {} tried, {} shrunk, {} dropped, {} exact checks",
+        sum.vos, plural(sum.cells_selected, "cell", "cells"), sum.vos_per_cell, sum.max_vos, q.tried, q.shrunk, q.dropped, q.checks
     );
     eprintln!(
-        "wrote {} bytes to {} ({:.1} bytes per cell over {} cells)",
-        sum.store_bytes,
+        "wrote {} to {} ({:.1} bytes per cell over {})",
+        plural(sum.store_bytes, "byte", "bytes"),
         output.display(),
         sum.bytes_per_cell,
-        g.cells
+        plural(g.cells as usize, "cell", "cells")
     );
     let sc = &sum.scene;
     if sc.skipped > 0 {
@@ -297,8 +339,8 @@ fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
             .map(|(k, v)| format!("{v} {k}"))
             .collect();
         eprintln!(
-            "scene: {} objects; {} skipped ({}; vocc info lists each)",
-            sc.objects,
+            "scene: {}; {} skipped ({}; vocc info lists each)",
+            plural(sc.objects, "object", "objects"),
             sc.skipped,
             why.join(", ")
         );
@@ -308,27 +350,30 @@ fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
 #[cfg(test)]
 mod tests {
     use super::shard;
+    use crate::args::{parse_shard, ShardSpec};
 
     #[test]
     fn shard_from_arguments_and_array_engines() {
         let none = |_: &str| None;
-        assert_eq!(shard("2/4", None, &none).unwrap(), (2, 4));
-        assert!(shard("4/4", None, &none).is_err());
-        assert!(shard("x/4", None, &none).is_err());
-        assert!(shard("auto", None, &none).is_err());
+        let spec = |s: &str| parse_shard(s).unwrap();
+        assert_eq!(shard(spec("2/4"), None, &none).unwrap(), (2, 4));
+        assert!(parse_shard("4/4").is_err());
+        assert!(parse_shard("x/4").is_err());
+        assert_eq!(spec("auto"), ShardSpec::Auto);
+        assert!(shard(spec("auto"), None, &none).is_err());
         let slurm = |k: &str| match k {
             "SLURM_ARRAY_TASK_ID" => Some("3".to_string()),
             "SLURM_ARRAY_TASK_COUNT" => Some("8".to_string()),
             _ => None,
         };
-        assert_eq!(shard("auto", None, &slurm).unwrap(), (3, 8));
+        assert_eq!(shard(spec("auto"), None, &slurm).unwrap(), (3, 8));
         let k8s = |k: &str| (k == "JOB_COMPLETION_INDEX").then(|| "5".to_string());
         assert!(
-            shard("auto", None, &k8s).is_err(),
+            shard(spec("auto"), None, &k8s).is_err(),
             "Kubernetes needs the count"
         );
-        assert_eq!(shard("auto", Some(6), &k8s).unwrap(), (5, 6));
+        assert_eq!(shard(spec("auto"), Some(6), &k8s).unwrap(), (5, 6));
         let aws = |k: &str| (k == "AWS_BATCH_JOB_ARRAY_INDEX").then(|| "0".to_string());
-        assert_eq!(shard("auto", Some(2), &aws).unwrap(), (0, 2));
+        assert_eq!(shard(spec("auto"), Some(2), &aws).unwrap(), (0, 2));
     }
 }

@@ -8,7 +8,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 
 use rayon::prelude::*;
@@ -24,11 +24,15 @@ use vocc::eval::report::{
 };
 use vocc::eval::truth::TruthParams;
 use vocc::runtime::culler::BoxTree;
-use vocc::scene::{self, ReadOptions};
+use vocc::scene::ReadOptions;
 
-use crate::args::{parse_count, ReadArgs};
-use crate::files::{check_output, parse, read_store, write_atomically};
+use crate::args::{parse_count, ReadArgs, SceneCheckArgs};
+use crate::files::{
+    check_output, check_report_dir, parse, read_store, write_atomically, write_report,
+};
 use crate::progress::Progress;
+use crate::report::{plural, round_timings};
+use crate::store::load_checked;
 
 /// Ground-truth sampling options.
 #[derive(Args, Clone)]
@@ -57,20 +61,24 @@ impl TruthArgs {
 
 #[derive(Args)]
 #[command(after_help = "Examples:
-  vocc eval city.vocc city.geojson --height-attr height --cells 20
+  vocc eval city.vocc city.geojson --height-attr height --sample 20
   vocc eval city.vocc city.geojson --height-attr height --cell 57,58,120 --json
-  vocc eval city.vocc city.geojson --height-attr height --cells 100 --report eval/")]
+  vocc eval city.vocc city.geojson --height-attr height --sample 100 --report eval")]
 pub struct EvalArgs {
     /// Store file.
     pub store: PathBuf,
-    /// The scene files the store was baked from (same files, same order).
+    /// The scene files the store was baked from (same files, same order, same reader flags:
+    /// checked against the store's scene, as `vocc pvs` does).
     #[arg(required = true)]
     pub scene: Vec<PathBuf>,
     #[command(flatten)]
     pub read: ReadArgs,
-    /// Evaluate a seeded sample of N cells (default: every cell).
-    #[arg(long, value_name = "N", value_parser = parse_count, conflicts_with = "cell")]
-    pub cells: Option<usize>,
+    #[command(flatten)]
+    pub check: SceneCheckArgs,
+    /// Evaluate a seeded sample of N cells (default: every cell). (`--cells N`, its old
+    /// spelling, still works.)
+    #[arg(long, alias = "cells", value_name = "N", value_parser = parse_count, conflicts_with = "cell")]
+    pub sample: Option<usize>,
     /// Evaluate these cells, by id (comma-separated).
     #[arg(long, value_name = "ID,...", value_delimiter = ',')]
     pub cell: Vec<u32>,
@@ -80,33 +88,25 @@ pub struct EvalArgs {
     #[arg(long)]
     pub json: bool,
     /// Write a Markdown report and its plots into this folder: eval.md, vos.svg (objects culled
-    /// against the number of VOs) and map.svg (PVS/VS per cell).
+    /// against the number of VOs) and map.svg (PVS/VS per cell). The folder is created (the
+    /// folder holding it must exist), and written all or nothing.
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
 }
 
-/// The report's files in `dir`.
-fn report_files(dir: &Path) -> [PathBuf; 3] {
-    [
-        dir.join("eval.md"),
-        dir.join("vos.svg"),
-        dir.join("map.svg"),
-    ]
-}
+/// The report's files, in a `--report` folder.
+const REPORT_FILES: [&str; 3] = ["eval.md", "vos.svg", "map.svg"];
 
 /// `vocc eval`; returns the exit status: 0, or 3 on a false cull or a ray reaching a VO.
 pub fn eval(a: EvalArgs) -> Result<i32> {
     let mut inputs: Vec<&Path> = vec![&a.store];
     inputs.extend(a.scene.iter().map(PathBuf::as_path));
     if let Some(dir) = &a.report {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        for f in report_files(dir) {
-            check_output(&f, &inputs)?;
-        }
+        check_report_dir(dir, &REPORT_FILES, &inputs)?;
     }
     let bytes = read_store(&a.store)?;
     let store = parse(&a.store, &bytes)?;
-    let s = scene::load(&a.scene, &a.read.options())?;
+    let s = load_checked(&store, &a.store, &a.scene, &a.read, &a.check)?;
     anyhow::ensure!(
         store.frame().origin == s.origin.to_array(),
         "the store's origin {:?} is not the scene's {:?}: give the files the store was baked from",
@@ -115,7 +115,7 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
     );
     let truth = a.truth.params();
     let ids = if a.cell.is_empty() {
-        sample_cells(&store, a.cells, a.truth.seed)
+        sample_cells(&store, a.sample, a.truth.seed)
     } else {
         let mut ids = a.cell.clone();
         ids.sort_unstable();
@@ -130,7 +130,7 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
     };
     let caster = Caster::new(&s);
     let tree = BoxTree::new(&object_boxes(&s));
-    let progress = Progress::new("ground truth", "cells", ids.len() as u64);
+    let progress = Progress::new("ground truth", ("cell", "cells"), ids.len() as u64);
     progress.start(ids.len() as u64);
     let vs: Vec<Vec<u32>> = ids
         .par_iter()
@@ -147,18 +147,17 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
     let sum = summarize(&s, &cells);
     let mut out = std::io::stdout().lock();
     if a.json {
-        serde_json::to_writer_pretty(
-            &mut out,
-            &serde_json::json!({"summary": sum, "vo_rays": rays, "cells": cells, "machine": machine()}),
-        )?;
+        let mut v = serde_json::json!({"summary": sum, "vo_rays": rays, "cells": cells, "machine": machine()});
+        round_timings(&mut v);
+        serde_json::to_writer_pretty(&mut out, &v)?;
         writeln!(out)?;
     } else {
         writeln!(
             out,
-            "{} cells, {} objects: {} false culls; PVS/VS median {:.2} (objects), {:.2} (triangles); {:.1}% of objects culled on average; culler {:.0} µs median",
-            sum.cells,
-            sum.objects,
-            sum.false_culls,
+            "{}, {}: {}; PVS/VS median {:.2} (objects), {:.2} (triangles); {:.1}% of objects culled on average; culler {:.0} µs median",
+            plural(sum.cells, "cell", "cells"),
+            plural(sum.objects, "object", "objects"),
+            plural(sum.false_culls, "false cull", "false culls"),
             sum.median_ratio,
             sum.median_ratio_triangles,
             100.0 * sum.occluded_share,
@@ -182,7 +181,6 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
         )?;
     }
     if let Some(dir) = &a.report {
-        let [md_file, vos_file, map_file] = report_files(dir);
         let cmd = std::env::args().collect::<Vec<_>>().join(" ");
         let mut md = eval_markdown(
             &format!("vocc eval: {}", a.store.display()),
@@ -228,20 +226,25 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
             percentile(&ratios, 0.95).max(1.5),
             "PVS/VS",
         );
-        write_atomically(&md_file, |w| w.write_all(md.as_bytes()))?;
-        write_atomically(&vos_file, |w| w.write_all(vo_plot.as_bytes()))?;
-        write_atomically(&map_file, |w| w.write_all(map.as_bytes()))?;
+        write_report(
+            dir,
+            &[
+                (REPORT_FILES[0], md.as_bytes()),
+                (REPORT_FILES[1], vo_plot.as_bytes()),
+                (REPORT_FILES[2], map.as_bytes()),
+            ],
+        )?;
         eprintln!(
-            "wrote {}, {} and {}",
-            md_file.display(),
-            vos_file.display(),
-            map_file.display()
+            "wrote the report {} ({})",
+            dir.display(),
+            REPORT_FILES.join(", ")
         );
     }
     if sum.false_culls > 0 || rays.reached > 0 {
         eprintln!(
-            "error: {} false culls (visible objects the PVS misses), {} rays reached a VO unblocked",
-            sum.false_culls, rays.reached
+            "error: {} (visible objects the PVS misses), {} reached a VO unblocked",
+            plural(sum.false_culls, "false cull", "false culls"),
+            plural(rays.reached as usize, "ray", "rays")
         );
         return Ok(3);
     }

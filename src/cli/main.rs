@@ -8,20 +8,26 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
-use clap::{Parser, Subcommand};
+use clap::error::ErrorKind;
+use clap::{ArgGroup, Parser, Subcommand};
 
 use vocc::scene;
 
-use args::{parse_buildings, parse_cell_size, parse_num, parse_positive, parse_xy, ReadArgs};
+use args::{
+    parse_buildings, parse_cell_size, parse_num, parse_positive, parse_xy, usage, ReadArgs,
+    SceneCheckArgs,
+};
 use files::write_atomically;
 
 mod args;
 mod bake;
+mod boxes;
 mod eval;
 mod files;
 mod info;
 mod progress;
 mod render;
+mod report;
 mod store;
 
 /// The exit status rule, shown by `--help`.
@@ -30,9 +36,15 @@ const EXIT_STATUS: &str = "Exit status:
   1  the run failed: an input cannot be read or is refused, an output cannot be written, or the
      options do not fit the scene (a region outside the grid, a grid too large)
   2  the command line is wrong: an unknown option, a missing argument, or a value outside its
-     option's range (checked before anything is read)
+     option's range (checked before anything is read, printed with the command's usage)
   3  vocc eval: a false cull, or a ray from an eye reaching a stored VO unblocked
-A closed output pipe (vocc ... | head) ends the run quietly with status 0.";
+A closed output pipe (vocc ... | head) ends the run quietly with status 0.
+
+Outputs: vocc creates the output it is asked for (a file, or eval --report's folder), never the
+folders above it (a missing one is refused before any work), and writes it all or nothing. No
+output may be one of the inputs. A store read with scene files (pvs, eval, render, inspect
+--list-cells) must be given the scene it was baked from: another one is refused, naming what
+differs (--allow-other-scene goes on with a warning).";
 
 #[derive(Parser)]
 #[command(
@@ -54,6 +66,12 @@ enum Command {
     /// Describe a store (2.0 or 1.0), one cell's VOs with their stored fields, or every cell.
     Inspect(store::InspectArgs),
     /// Build the potentially visible set of one cell from a store and the scene's objects.
+    ///
+    /// The scene must be the one the store was baked from (same files, same reader flags): the
+    /// store's scene section (object count, fingerprint, CRS) is checked, and another scene is
+    /// refused naming what differs. A 1.0 store records no scene: a note says the check could
+    /// not be made.
+    #[command(group(ArgGroup::new("which").required(true).args(["cell", "at"])))]
     Pvs {
         /// Store file.
         store: PathBuf,
@@ -62,8 +80,10 @@ enum Command {
         scene: Vec<PathBuf>,
         #[command(flatten)]
         read: ReadArgs,
+        #[command(flatten)]
+        check: SceneCheckArgs,
         /// The cell, by id.
-        #[arg(long, value_name = "ID", conflicts_with = "at")]
+        #[arg(long, value_name = "ID")]
         cell: Option<u32>,
         /// The cell holding this world position X,Y.
         #[arg(long, value_name = "X,Y", value_parser = parse_xy, allow_hyphen_values = true)]
@@ -74,7 +94,27 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Write a scene's object boxes, with their ids, as the text file the C example reads.
+    ///
+    /// One line per object: `ID XMIN YMIN ZMIN XMAX YMAX ZMAX`, world coordinates, ID the input
+    /// feature number (the number `vocc pvs` and `vocc info` give), after two `#` lines: the
+    /// format, and the scene (`# scene FINGERPRINT objects N crs "NAME"`) for checking against
+    /// a store. The boxes are the very numbers `vocc pvs` culls (shortest round-trip form).
+    #[command(after_help = "Examples:
+  vocc boxes data/lyon1/buildings_lyon1.geojson --height-attr HAUTEUR -o lyon.boxes
+  vocc boxes data/helsinki/Helsinki.osm.pbf --default-height 9 -o helsinki.boxes")]
+    Boxes {
+        /// Scene files, with the reader flags of the bake.
+        #[arg(required = true)]
+        scene: Vec<PathBuf>,
+        #[command(flatten)]
+        read: ReadArgs,
+        /// Output box file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Export one cell's VOs: as JSON (world coordinates), as OBJ quads, or as a per-cell blob.
+    #[command(group(ArgGroup::new("format").required(true).args(["json", "obj", "blob"])))]
     Export {
         /// Store file.
         store: PathBuf,
@@ -140,6 +180,8 @@ enum Command {
         radius: f64,
         #[command(flatten)]
         read: ReadArgs,
+        #[command(flatten)]
+        check: SceneCheckArgs,
         /// Output SVG file.
         #[arg(short, long)]
         output: PathBuf,
@@ -182,15 +224,57 @@ enum Command {
 }
 
 fn main() {
-    let code = match run(Cli::parse()) {
+    let raw: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let cli = Cli::parse_from(&raw);
+    deprecated_spellings(&raw);
+    let code = match run(cli) {
         Ok(code) => code,
         Err(e) if broken_pipe(&e) => 0,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            1
-        }
+        Err(e) => match e.downcast::<args::UsageError>() {
+            // A usage error found after parsing: clap's form and status (2).
+            Ok(u) => usage_error(&u).exit(),
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                1
+            }
+        },
     };
     std::process::exit(code);
+}
+
+/// A usage error found after a command started ([`args::UsageError`]) as clap prints its
+/// own: the message and the command's usage, exit status 2.
+fn usage_error(u: &args::UsageError) -> clap::Error {
+    use clap::CommandFactory;
+    let mut cli = Cli::command();
+    cli.build();
+    match cli.find_subcommand_mut(u.command) {
+        Some(c) => c.error(u.kind, &u.message),
+        None => cli.error(u.kind, &u.message),
+    }
+}
+
+/// The old spellings of renamed options still work; each use gets a note on stderr.
+fn deprecated_spellings(raw: &[std::ffi::OsString]) {
+    let args: Vec<&str> = raw.iter().skip(1).filter_map(|a| a.to_str()).collect();
+    let Some(command) = args.iter().find(|a| !a.starts_with('-')) else {
+        return;
+    };
+    let new = match *command {
+        "bake" => "--walkable FILE",
+        "eval" => "--sample N",
+        "inspect" => "--list-cells",
+        _ => return,
+    };
+    let end = args.iter().position(|a| *a == "--").unwrap_or(args.len());
+    if args[..end]
+        .iter()
+        .any(|a| *a == "--cells" || a.starts_with("--cells="))
+    {
+        eprintln!(
+            "note: `vocc {command} --cells` is deprecated (the name meant another thing in each command); use {new}"
+        );
+    }
 }
 
 /// Whether the error is a write into a closed pipe (`vocc ... | head`): Unix tools stop quietly.
@@ -211,7 +295,13 @@ fn help(command: Option<&str>) -> Result<()> {
         None => cli.print_help()?,
         Some(name) => match cli.find_subcommand_mut(name) {
             Some(c) => c.print_long_help()?,
-            None => anyhow::bail!("no command {name:?}; `vocc help` lists them"),
+            None => {
+                return Err(usage(
+                    "help",
+                    ErrorKind::InvalidSubcommand,
+                    format!("no command {name:?}; `vocc help` lists them"),
+                ))
+            }
         },
     }
     Ok(())
@@ -228,10 +318,16 @@ fn run(cli: Cli) -> Result<i32> {
             store,
             scene,
             read,
+            check,
             cell,
             at,
             json,
-        } => store::pvs(store, scene, &read, cell, at, json),
+        } => store::pvs(store, scene, &read, &check, cell, at, json),
+        Command::Boxes {
+            scene,
+            read,
+            output,
+        } => boxes::boxes(&scene, &read, &output),
         Command::Export {
             store,
             cell,
@@ -239,11 +335,11 @@ fn run(cli: Cli) -> Result<i32> {
             obj,
             blob,
         } => {
+            // clap requires exactly one of the three.
             let to = match (json, obj, blob) {
-                (_, Some(f), None) => store::ExportTo::Obj(f),
+                (_, Some(f), _) => store::ExportTo::Obj(f),
                 (_, None, Some(f)) => store::ExportTo::Blob(f),
-                (true, None, None) => store::ExportTo::Json,
-                _ => anyhow::bail!("give one of --json, --obj FILE, --blob FILE"),
+                _ => store::ExportTo::Json,
             };
             store::export(store, cell, to)
         }
@@ -257,12 +353,45 @@ fn run(cli: Cli) -> Result<i32> {
             slice,
             radius,
             read,
+            check,
             output,
         } => {
             if debug {
+                let Some(at) = at else {
+                    return Err(usage(
+                        "render",
+                        ErrorKind::MissingRequiredArgument,
+                        "--debug needs --at X,Y (the cell is the one holding that point)",
+                    ));
+                };
+                if cell.is_some() {
+                    return Err(usage(
+                        "render",
+                        ErrorKind::ArgumentConflict,
+                        "--debug takes --at X,Y, not --cell (it bakes no store; its grid is anchored at the scene)",
+                    ));
+                }
                 render::render_debug(&files, &read, at, cell_size, slice, &output)
             } else {
-                render::render_store(files, &read, cell, at, radius, &output)
+                if files.len() < 2 {
+                    return Err(usage(
+                        "render",
+                        ErrorKind::MissingRequiredArgument,
+                        "give the store, then the scene files it was baked from (or --debug with scene files alone)",
+                    ));
+                }
+                if cell.is_none() == at.is_none() {
+                    return Err(usage(
+                        "render",
+                        if cell.is_none() {
+                            ErrorKind::MissingRequiredArgument
+                        } else {
+                            ErrorKind::ArgumentConflict
+                        },
+                        "give one of --cell ID, --at X,Y",
+                    ));
+                }
+                render::render_store(files, &read, &check, cell, at, radius, &output)
             }
         }
         Command::Merge { shards, output } => store::merge(shards, &output),

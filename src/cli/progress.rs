@@ -16,7 +16,8 @@ pub const LOG_EVERY_S: f64 = 5.0;
 
 pub struct Progress {
     what: String,
-    unit: String,
+    /// The unit counted, singular and plural ("cell", "cells").
+    unit: (String, String),
     total: AtomicU64,
     done: AtomicU64,
     start: Instant,
@@ -37,13 +38,15 @@ fn secs(s: f64) -> String {
 }
 
 impl Progress {
-    /// `what` is the activity ("baking"), `unit` what is counted ("cells").
-    pub fn new(what: &str, unit: &str, total: u64) -> Progress {
+    /// `what` is the activity ("baking"), `unit` what is counted, singular and plural
+    /// (`("cell", "cells")`).
+    pub fn new(what: &str, unit: (&str, &str), total: u64) -> Progress {
+        let (one, many) = unit;
         let bar = std::io::stderr().is_terminal().then(|| {
             let b = indicatif::ProgressBar::new(total);
             b.set_style(
                 indicatif::ProgressStyle::with_template(&format!(
-                    "{what} {{bar:40}} {{pos}}/{{len}} {unit}, {{per_sec}}, {{elapsed}} elapsed, about {{eta}} left"
+                    "{what} {{bar:40}} {{pos}}/{{len}} {many}, {{per_sec}}, {{elapsed}} elapsed, about {{eta}} left"
                 ))
                 .expect("a valid template"),
             );
@@ -56,7 +59,7 @@ impl Progress {
             .unwrap_or(LOG_EVERY_S);
         Progress {
             what: what.to_string(),
-            unit: unit.to_string(),
+            unit: (one.to_string(), many.to_string()),
             total: AtomicU64::new(total),
             done: AtomicU64::new(0),
             start: Instant::now(),
@@ -72,7 +75,7 @@ impl Progress {
         self.total.store(total, Ordering::Relaxed);
         match &self.bar {
             Some(b) => b.set_length(total),
-            None => eprintln!("{}: {total} {}", self.what, self.unit),
+            None => eprintln!("{}: {}", self.what, self.count(total)),
         }
     }
 
@@ -91,6 +94,11 @@ impl Progress {
         }
     }
 
+    /// "228 cells", "1 cell".
+    fn count(&self, n: u64) -> String {
+        format!("{n} {}", if n == 1 { &self.unit.0 } else { &self.unit.1 })
+    }
+
     /// "baking: 120/228 cells (53%), 12.3 cells/s, 10 s elapsed, about 9 s left".
     fn line(&self, done: u64) -> String {
         let total = self.total.load(Ordering::Relaxed);
@@ -98,11 +106,11 @@ impl Progress {
         let rate = done as f64 / t.max(1e-9);
         let left = total.saturating_sub(done) as f64 / rate.max(1e-9);
         format!(
-            "{}: {done}/{total} {} ({:.0}%), {rate:.1} {}/s, {} elapsed, about {} left",
+            "{}: {done}/{} ({:.0}%), {rate:.1} {}/s, {} elapsed, about {} left",
             self.what,
-            self.unit,
+            self.count(total),
             100.0 * done as f64 / total.max(1) as f64,
-            self.unit,
+            self.unit.1,
             secs(t),
             secs(left)
         )
@@ -115,10 +123,9 @@ impl Progress {
             None => {
                 let done = self.done.load(Ordering::Relaxed);
                 eprintln!(
-                    "{}: {done}/{} {} done in {}",
+                    "{}: {done}/{} done in {}",
                     self.what,
-                    self.total.load(Ordering::Relaxed),
-                    self.unit,
+                    self.count(self.total.load(Ordering::Relaxed)),
                     secs(self.start.elapsed().as_secs_f64())
                 );
             }

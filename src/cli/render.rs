@@ -14,21 +14,20 @@ use vocc::runtime::culler::BoxTree;
 use vocc::runtime::CellId;
 use vocc::scene;
 
-use crate::args::ReadArgs;
+use crate::args::{ReadArgs, SceneCheckArgs};
 use crate::files::{check_output, parse, read_store, write_atomically};
-use crate::store::which_cell;
+use crate::store::{load_checked, which_cell};
 
 /// `vocc render --debug SCENE... --at X,Y`: the 2D growth of one slice of the cell holding the
 /// point, on a grid of `cell_size` anchored at the scene's minimum corner.
 pub fn render_debug(
     scene_files: &[PathBuf],
     read: &ReadArgs,
-    at: Option<(f64, f64)>,
+    at: (f64, f64),
     cell_size: f64,
     slice: Option<f64>,
     output: &Path,
 ) -> Result<()> {
-    let at = at.context("--debug needs --at X,Y")?;
     let inputs: Vec<&Path> = scene_files.iter().map(PathBuf::as_path).collect();
     check_output(output, &inputs)?;
     let s = scene::load(scene_files, &read.options())?;
@@ -68,6 +67,7 @@ pub fn render_debug(
 pub fn render_store(
     files: Vec<PathBuf>,
     read: &ReadArgs,
+    check: &SceneCheckArgs,
     cell: Option<CellId>,
     at: Option<(f64, f64)>,
     radius: f64,
@@ -86,7 +86,7 @@ pub fn render_store(
     let store = parse(store_path, &bytes)?;
     let id = which_cell(&store, cell, at)?;
     let rec = store.cell(id)?;
-    let s = scene::load(scene_files, &read.options())?;
+    let s = load_checked(&store, store_path, scene_files, read, check)?;
     let f = *store.frame();
     anyhow::ensure!(
         f.origin == s.origin.to_array(),
@@ -112,8 +112,8 @@ pub fn render_store(
         vocc::eval::picture::cell_picture(&s, &f, id, &rec, &visible, Some(&base_visible), radius);
     write_atomically(output, |w| w.write_all(svg.as_bytes()))?;
     eprintln!(
-        "cell {id}: {} VOs; {} of {} objects potentially visible ({} with single buildings alone); wrote {}",
-        rec.vos().len(),
+        "cell {id}: {}; {} of {} objects potentially visible ({} with single buildings alone); wrote {}",
+        crate::report::plural(rec.vos().len(), "VO", "VOs"),
         visible.len(),
         s.objects.len(),
         base_visible.len(),

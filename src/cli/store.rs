@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use clap::error::ErrorKind;
 use clap::Args;
 use serde_json::json;
 
@@ -19,10 +20,12 @@ use vocc::runtime::culler::{pvs_with_stats, BoxTree};
 use vocc::runtime::format::{encode_blob, encode_frame, encode_store_with, CellRecord, Store};
 use vocc::runtime::frame::{QPoint, QVo, HEIGHT_LEVELS, HEIGHT_LEVELS_V1};
 use vocc::runtime::{CellId, Frame};
-use vocc::scene;
+use vocc::scene::check::{self, SceneCheck, SceneFacts};
+use vocc::scene::{self, Scene};
 
-use crate::args::ReadArgs;
+use crate::args::{ReadArgs, SceneCheckArgs};
 use crate::files::{check_output, parse, read_store, write_atomically};
+use crate::report::plural;
 
 fn cell_record(store: &Store, id: CellId) -> Result<CellRecord> {
     anyhow::ensure!(
@@ -83,7 +86,7 @@ fn cell_json(f: &Frame, id: CellId, rec: &CellRecord, major: u16) -> serde_json:
     })
 }
 
-/// How `inspect --cells` orders its rows.
+/// How `inspect --list-cells` orders its rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum SortKey {
     /// Ascending cell id.
@@ -100,53 +103,90 @@ pub enum SortKey {
 #[command(after_help = "Examples:
   vocc inspect city.vocc
   vocc inspect city.vocc --cell 57
-  vocc inspect city.vocc --cells --sort vos --top 20
-  vocc inspect city.vocc city.geojson --height-attr height --cells --sort culled --json")]
+  vocc inspect city.vocc --list-cells --sort vos --top 20
+  vocc inspect city.vocc city.geojson --height-attr height --list-cells --sort culled --json")]
 pub struct InspectArgs {
     /// Store file.
     pub store: PathBuf,
-    /// The scene files the store was baked from (optional): with --cells, each cell's share of
-    /// objects culled.
+    /// The scene files the store was baked from (optional): with --list-cells, each cell's share
+    /// of objects culled (checked against the store's scene, as `vocc pvs` does).
     pub scene: Vec<PathBuf>,
     #[command(flatten)]
     pub read: ReadArgs,
+    #[command(flatten)]
+    pub check: SceneCheckArgs,
     /// Show this cell's VOs, in world coordinates.
-    #[arg(long, value_name = "ID", conflicts_with = "cells")]
+    #[arg(long, value_name = "ID", conflicts_with = "list_cells")]
     pub cell: Option<u32>,
-    /// List every cell: VOs, bytes, ground; with scene files, the objects culled.
-    #[arg(long)]
-    pub cells: bool,
-    /// With --cells: the order of the rows.
-    #[arg(long, value_enum, default_value = "id", requires = "cells")]
+    /// List every cell: VOs, bytes, ground; with scene files, the objects culled. (`--cells`,
+    /// its old spelling, still works.)
+    #[arg(long, alias = "cells")]
+    pub list_cells: bool,
+    /// With --list-cells: the order of the rows.
+    #[arg(long, value_enum, default_value = "id", requires = "list_cells")]
     pub sort: SortKey,
-    /// With --cells: only the first N rows.
-    #[arg(long, value_name = "N", value_parser = crate::args::parse_count, requires = "cells")]
+    /// With --list-cells: only the first N rows.
+    #[arg(long, value_name = "N", value_parser = crate::args::parse_count, requires = "list_cells")]
     pub top: Option<usize>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
 }
 
-/// The scene's object boxes in the store's local frame, refused when none of them meets the
-/// store's grid (a scene in another coordinate system than the store).
-fn scene_boxes(
+/// Checks `scene` against the scene the store at `store_path` was baked from (its scene
+/// section): an error naming what differs and the likely cause, or with `--allow-other-scene` a
+/// warning; a note when the store records no scene (1.0), so the check could not be made.
+pub fn check_scene(
+    store: &Store,
+    store_path: &Path,
+    scene: &Scene,
+    args: &SceneCheckArgs,
+) -> Result<()> {
+    match check::check(&store.scene_section(), &SceneFacts::of(scene)) {
+        SceneCheck::Same => Ok(()),
+        SceneCheck::NotRecorded => {
+            let (major, minor) = store.version();
+            eprintln!(
+                "note: {} (store {major}.{minor}) records no scene, so whether these files and reader flags are the ones baked could not be checked",
+                store_path.display()
+            );
+            Ok(())
+        }
+        SceneCheck::Differs(m) if args.allow_other_scene => {
+            eprintln!(
+                "warning: {}: {m}. Going on (--allow-other-scene): the store's VOs were certified against another scene, so its PVSs are not guaranteed",
+                store_path.display()
+            );
+            Ok(())
+        }
+        SceneCheck::Differs(m) => anyhow::bail!(
+            "{}: {m}. Give the files and reader flags of the bake (or --allow-other-scene to go on anyway)",
+            store_path.display()
+        ),
+    }
+}
+
+/// Loads the scene files and checks them against the store's scene ([`check_scene`]).
+pub fn load_checked(
     store: &Store,
     store_path: &Path,
     files: &[PathBuf],
     read: &ReadArgs,
-) -> Result<(usize, BoxTree)> {
-    let (n, tree, _) = scene_boxes_and_features(store, store_path, files, read)?;
-    Ok((n, tree))
+    args: &SceneCheckArgs,
+) -> Result<Scene> {
+    let s = scene::load(files, &read.options())?;
+    check_scene(store, store_path, &s, args)?;
+    Ok(s)
 }
 
-/// [`scene_boxes`], with each object's input feature number (by object index).
+/// The scene's object boxes in the store's local frame, with each object's input feature
+/// number (by object index); refused when none of them meets the store's grid (a scene in
+/// another coordinate system than the store).
 fn scene_boxes_and_features(
     store: &Store,
     store_path: &Path,
-    files: &[PathBuf],
-    read: &ReadArgs,
+    s: &Scene,
 ) -> Result<(usize, BoxTree, Vec<u32>)> {
-    let s = scene::load(files, &read.options())?;
     let features: Vec<u32> = s.objects.iter().map(|ob| ob.feature).collect();
     let o = s.origin;
     let world: Vec<[f64; 6]> = s
@@ -182,18 +222,16 @@ fn scene_boxes_and_features(
     Ok((world.len(), BoxTree::from_world(&world, f.origin), features))
 }
 
-/// `inspect --cells`: one row per cell.
+/// `inspect --list-cells`: one row per cell.
 fn list_cells(a: &InspectArgs, store: &Store) -> Result<()> {
     let f = *store.frame();
     let scene = if a.scene.is_empty() {
         None
     } else {
-        Some(scene_boxes(store, &a.store, &a.scene, &a.read)?)
+        let s = load_checked(store, &a.store, &a.scene, &a.read, &a.check)?;
+        let (n, tree, _) = scene_boxes_and_features(store, &a.store, &s)?;
+        Some((n, tree))
     };
-    anyhow::ensure!(
-        a.sort != SortKey::Culled || scene.is_some(),
-        "--sort culled needs the scene files after the store"
-    );
     struct Row {
         id: CellId,
         rec: CellRecord,
@@ -284,17 +322,28 @@ fn list_cells(a: &InspectArgs, store: &Store) -> Result<()> {
 }
 
 pub fn inspect(a: InspectArgs) -> Result<()> {
+    // Usage first, before anything is read.
+    if a.list_cells && a.sort == SortKey::Culled && a.scene.is_empty() {
+        return Err(crate::args::usage(
+            "inspect",
+            ErrorKind::MissingRequiredArgument,
+            "--sort culled needs the scene files after the store",
+        ));
+    }
+    if !a.list_cells && !a.scene.is_empty() {
+        return Err(crate::args::usage(
+            "inspect",
+            ErrorKind::ArgumentConflict,
+            "scene files are read only with --list-cells (each cell's share of objects culled)",
+        ));
+    }
     let path = &a.store;
     let bytes = read_store(path)?;
     let store = parse(path, &bytes)?;
     let f = *store.frame();
-    if a.cells {
+    if a.list_cells {
         return list_cells(&a, &store);
     }
-    anyhow::ensure!(
-        a.scene.is_empty(),
-        "scene files are read only with --cells (each cell's share of objects culled)"
-    );
     let mut out = std::io::stdout().lock();
     if let Some(id) = a.cell {
         let rec = cell_record(&store, id)?;
@@ -315,9 +364,9 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
             match rec {
                 CellRecord::Skipped => "skipped (inside a building), no VOs".to_string(),
                 _ => format!(
-                    "ground {:.2} m, {} VOs, {} bytes",
+                    "ground {:.2} m, {}, {} bytes",
                     f.ground_z(rec.ground()) + o[2],
-                    rec.vos().len(),
+                    plural(rec.vos().len(), "VO", "VOs"),
                     store.cell_bytes(id)
                 ),
             }
@@ -400,9 +449,10 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     }
     writeln!(
         out,
-        "{}: vocc store {major}.{minor}, {} bytes, {n} cells ({:.1} bytes per cell)",
+        "{}: vocc store {major}.{minor}, {} bytes, {} ({:.1} bytes per cell)",
         path.display(),
         bytes.len(),
+        plural(n as usize, "cell", "cells"),
         bytes.len() as f64 / n.max(1) as f64
     )?;
     writeln!(
@@ -435,8 +485,9 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     )?;
     writeln!(
         out,
-        "VOs: {vos} ({:.2} per cell, at most {most}); {skipped} cells skipped (inside a building)",
-        vos as f64 / n.max(1) as f64
+        "VOs: {vos} ({:.2} per cell, at most {most}); {} skipped (inside a building)",
+        vos as f64 / n.max(1) as f64,
+        plural(skipped, "cell", "cells")
     )?;
     let h: Vec<String> = hist
         .iter()
@@ -477,6 +528,7 @@ pub fn which_cell(store: &Store, cell: Option<CellId>, at: Option<(f64, f64)>) -
                 .cell_at(x - o[0], y - o[1])
                 .with_context(|| format!("({x}, {y}) lies outside the store's grid"))
         }
+        // The commands require one of the two (clap, or a usage check before any reading).
         (None, None) => anyhow::bail!("give --cell ID or --at X,Y"),
     }
 }
@@ -485,6 +537,7 @@ pub fn pvs(
     path: PathBuf,
     scene_files: Vec<PathBuf>,
     read: &ReadArgs,
+    check: &SceneCheckArgs,
     cell: Option<CellId>,
     at: Option<(f64, f64)>,
     as_json: bool,
@@ -493,7 +546,8 @@ pub fn pvs(
     let store = parse(&path, &bytes)?;
     let id = which_cell(&store, cell, at)?;
     let rec = store.cell(id)?;
-    let (objects, tree, features) = scene_boxes_and_features(&store, &path, &scene_files, read)?;
+    let s = load_checked(&store, &path, &scene_files, read, check)?;
+    let (objects, tree, features) = scene_boxes_and_features(&store, &path, &s)?;
     let mut visible = Vec::new();
     let t = Instant::now();
     let st = pvs_with_stats(store.frame(), id, &rec, &tree, &mut visible);
@@ -513,11 +567,11 @@ pub fn pvs(
     } else {
         writeln!(
             out,
-            "cell {id}: {} of {} objects potentially visible ({:.1}%), {} VOs, built in {us:.0} µs ({} nodes tested)",
+            "cell {id}: {} of {} objects potentially visible ({:.1}%), {}, built in {us:.0} µs ({} nodes tested)",
             visible.len(),
             objects,
             100.0 * visible.len() as f64 / objects.max(1) as f64,
-            st.vos,
+            plural(st.vos, "VO", "VOs"),
             st.nodes_tested
         )?;
     }
@@ -586,8 +640,8 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
             let frame_file = frame_path(&file);
             write_atomically(&frame_file, |w| w.write_all(&encode_frame(&f)))?;
             eprintln!(
-                "wrote cell {id} ({} VOs) as a {}-byte blob to {}, and the {}-byte frame it decodes with to {}",
-                rec.vos().len(),
+                "wrote cell {id} ({}) as a {}-byte blob to {}, and the {}-byte frame it decodes with to {}",
+                plural(rec.vos().len(), "VO", "VOs"),
                 blob.len(),
                 file.display(),
                 encode_frame(&f).len(),

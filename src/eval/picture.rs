@@ -1,9 +1,11 @@
 //! The top view of one cell, like the paper's Fig. 8 (`vocc render STORE SCENE --cell ID`).
 //!
 //! Input: the scene, a store's frame and one cell's record, the cell's PVS, and optionally the
-//! PVS of the single-building baseline. Output: an SVG: the cell, its VOs, and every building
-//! coloured as visible (in the PVS), culled only thanks to fusion (hidden by the VOs but not by
-//! single buildings), or culled by single buildings alone.
+//! PVS of the single-building baseline. Output: an SVG: the cell, its VOs (each numbered where
+//! it enters the view, the label kept on the canvas), every building in the view coloured as
+//! visible (in the PVS), culled only thanks to fusion (hidden by the VOs but not by single
+//! buildings), or culled by single buildings alone, a scale bar, and a caption that says which
+//! counts are the view's and which the whole scene's.
 //! Invariant: drawing only; every colour comes from the given sets.
 
 use std::fmt::Write;
@@ -37,7 +39,7 @@ pub fn cell_picture(
     let _ = write!(
         s,
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{}" font-family="sans-serif" font-size="13"><rect width="100%" height="100%" fill="white"/>"#,
-        size + 60.0
+        size + 80.0
     );
     let (mut n_vis, mut n_fused, mut n_single) = (0, 0, 0);
     for o in &scene.objects {
@@ -142,47 +144,124 @@ pub fn cell_picture(
         p(r[2], r[3]),
         p(r[0], r[3])
     );
+    let view = [cx - radius, cy - radius, cx + radius, cy + radius];
+    let px = |x: f64, y: f64| ((x - cx + radius) * k, (radius - (y - cy)) * k);
+    let mut beyond = 0;
     for (i, q) in rec.vos().iter().enumerate() {
-        if let Some(g) = f.dequantize(id, rec.ground(), q) {
-            let (a, b) = (p(g.a[0], g.a[1]), p(g.b[0], g.b[1]));
-            let (a, b) = (
-                a.split_once(',').unwrap_or(("0", "0")),
-                b.split_once(',').unwrap_or(("0", "0")),
-            );
-            let _ = write!(
-                s,
-                r##"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="#0050d0" stroke-width="3"/><text x="{}" y="{}" fill="#0050d0">{}</text>"##,
-                a.0,
-                a.1,
-                b.0,
-                b.1,
-                a.0,
-                a.1,
-                i + 1
-            );
-        }
+        let Some(g) = f.dequantize(id, rec.ground(), q) else {
+            continue;
+        };
+        // Only the part of the VO inside the view is drawn, and its number stands where that
+        // part begins, moved onto the canvas when it would fall off.
+        let Some((a, b)) = clip(g.a, g.b, view) else {
+            beyond += 1;
+            continue;
+        };
+        let (a, b) = (px(a[0], a[1]), px(b[0], b[1]));
+        let (lx, ly) = (a.0.clamp(4.0, size - 22.0), a.1.clamp(16.0, size - 6.0));
+        let _ = write!(
+            s,
+            r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#0050d0" stroke-width="3"/><text x="{lx:.1}" y="{ly:.1}" fill="#0050d0">{}</text>"##,
+            a.0,
+            a.1,
+            b.0,
+            b.1,
+            i + 1
+        );
     }
-    // The caption in two lines, each well within the picture's width (at most about 110
-    // characters of 13 px sans-serif).
+    // The scale bar, bottom left: a round length near a fifth of the view.
+    let bar = scale_length(0.4 * radius);
+    let (x0, y0) = (16.0, size - 18.0);
+    let x1 = x0 + bar * k;
     let _ = write!(
         s,
-        r##"<text x="10" y="{}">cell {id}: {} VOs (blue, numbered in stored order){}</text><text x="10" y="{}">buildings: visible {n_vis} (grey), culled thanks to fusion {n_fused} (red){}</text></svg>"##,
+        r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="30" fill="white" fill-opacity="0.8"/><polyline points="{x0:.1},{:.1} {x0:.1},{y0:.1} {x1:.1},{y0:.1} {x1:.1},{:.1}" fill="none" stroke="black" stroke-width="2"/><text x="{:.1}" y="{:.1}" text-anchor="middle">{} m</text>"##,
+        x0 - 8.0,
+        y0 - 24.0,
+        x1 - x0 + 16.0,
+        y0 - 6.0,
+        y0 - 6.0,
+        0.5 * (x0 + x1),
+        y0 - 8.0,
+        bar
+    );
+    // The caption, each line well within the picture's width (at most about 110 characters of
+    // 13 px sans-serif): the whole scene's counts first, then the view's.
+    let outside = if beyond > 0 {
+        format!(", {beyond} beyond this view")
+    } else {
+        String::new()
+    };
+    let mut third = Vec::new();
+    if baseline.is_some() {
+        third.push(format!(
+            "culled by single buildings alone {n_single} (orange)"
+        ));
+    }
+    if n_skipped > 0 {
+        third.push(format!("{n_skipped} skipped objects (dashed)"));
+    }
+    let _ = write!(
+        s,
+        r##"<text x="10" y="{}">cell {id}: {} VOs (blue, numbered in stored order{outside}); whole scene: PVS {} of {} objects</text><text x="10" y="{}">in this view ({:.0} m square): visible {n_vis} (grey), culled thanks to fusion {n_fused} (red)</text><text x="10" y="{}">{}</text></svg>"##,
         size + 24.0,
         rec.vos().len(),
-        if n_skipped > 0 {
-            format!("; {n_skipped} skipped objects (dashed)")
-        } else {
-            String::new()
-        },
+        pvs.len(),
+        scene.objects.len(),
         size + 46.0,
-        if baseline.is_some() {
-            format!(", culled by single buildings alone {n_single} (orange)")
-        } else {
-            String::new()
-        }
+        2.0 * radius,
+        size + 68.0,
+        third.join("; ")
     );
     s.push('\n');
     s
+}
+
+/// The part of segment `a`-`b` inside the rectangle `[x0, y0, x1, y1]` (Liang-Barsky), or
+/// `None` when none of it is.
+fn clip(a: [f64; 2], b: [f64; 2], r: [f64; 4]) -> Option<([f64; 2], [f64; 2])> {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (pk, qk) in [
+        (-d[0], a[0] - r[0]),
+        (d[0], r[2] - a[0]),
+        (-d[1], a[1] - r[1]),
+        (d[1], r[3] - a[1]),
+    ] {
+        if pk == 0.0 {
+            if qk < 0.0 {
+                return None;
+            }
+        } else {
+            let t = qk / pk;
+            if pk < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+        }
+    }
+    (t0 <= t1).then(|| {
+        (
+            [a[0] + t0 * d[0], a[1] + t0 * d[1]],
+            [a[0] + t1 * d[0], a[1] + t1 * d[1]],
+        )
+    })
+}
+
+/// The largest of 1, 2 and 5 times a power of ten that is at most `most` metres (at least 1).
+fn scale_length(most: f64) -> f64 {
+    let mut best = 1.0;
+    let mut p = 1.0;
+    while p <= most {
+        for m in [1.0, 2.0, 5.0] {
+            if m * p <= most {
+                best = m * p;
+            }
+        }
+        p *= 10.0;
+    }
+    best
 }
 
 /// Points in the plane, in order.
@@ -236,4 +315,28 @@ fn mesh_top_view(m: &crate::scene::Mesh) -> (Vec<Polyline>, Vec<Polyline>) {
         }
     }
     (covers, walls)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clip_keeps_the_part_inside_and_scale_lengths_are_round() {
+        let r = [0.0, 0.0, 10.0, 10.0];
+        assert_eq!(
+            clip([-5.0, 5.0], [5.0, 5.0], r),
+            Some(([0.0, 5.0], [5.0, 5.0]))
+        );
+        assert_eq!(clip([-5.0, -5.0], [-1.0, 20.0], r), None);
+        assert_eq!(
+            clip([2.0, 2.0], [3.0, 3.0], r),
+            Some(([2.0, 2.0], [3.0, 3.0]))
+        );
+        assert_eq!(scale_length(200.0), 200.0);
+        assert_eq!(scale_length(399.0), 200.0);
+        assert_eq!(scale_length(499.0), 200.0);
+        assert_eq!(scale_length(500.0), 500.0);
+        assert_eq!(scale_length(0.5), 1.0);
+    }
 }

@@ -101,6 +101,9 @@ pub enum LoadErrorKind {
     },
     #[error("unknown geometry type {0:?}")]
     UnknownGeometryType(String),
+    /// A walkable area (`bake --walkable`) holds a geometry without area.
+    #[error("geometry type {0:?} has no area: a walkable area is made of Polygon and MultiPolygon geometries (buffer points and lines into polygons first)")]
+    NotAnArea(String),
     #[error(
         "attribute {attr:?} gives no feature a height (missing, or not usable, everywhere); {hint}"
     )]

@@ -15,6 +15,7 @@
 //! - nothing here panics on bad input: readers return [`LoadError`].
 
 pub mod attr;
+pub mod check;
 pub mod citygml;
 pub mod cityjson;
 pub mod crs;

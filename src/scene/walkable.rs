@@ -65,14 +65,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8], origin: DVec3) -> Result<Area, Load
             ("Polygon" | "MultiPolygon", _) => {
                 return Err(err(at, malformed("geometry without valid coordinates")))
             }
-            (other, _) => {
-                return Err(err(
-                    at,
-                    LoadErrorKind::UnknownGeometryType(format!(
-                        "{other} (a walkable area is made of Polygon and MultiPolygon geometries)"
-                    )),
-                ))
-            }
+            (other, _) => return Err(err(at, LoadErrorKind::NotAnArea(other.to_string()))),
         };
         for p in polygons {
             let outer = p
