@@ -42,7 +42,7 @@ function bruteForce(f, id, rec, boxes) {
   return out;
 }
 
-/** @param {() => number} r */
+/** @param {() => number} r @param {number} nBoxes */
 function randomScene(r, nBoxes) {
   const k = (/** @type {number} */ x) => Math.trunc(256 + (x - 250) / 0.5);
   const vos = [];

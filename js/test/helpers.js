@@ -93,8 +93,11 @@ const indexByte = (r) => (r.skipped ? 255 : (r.vos ?? []).length);
  */
 export function encodeStore(f, cells, opt = {}) {
   const major = opt.major ?? 2;
+  /** @type {number[]} */
   const index = [];
+  /** @type {number[]} */
   const table = [];
+  /** @type {number[]} */
   const payload = [];
   cells.forEach((r, i) => {
     if (i % 64 === 0) table.push(...u32(payload.length));

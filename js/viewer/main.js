@@ -62,6 +62,14 @@ const boxes = section('boxes');
 const features = section('features');
 const n = features.length;
 const tree = BoxTree.fromWorld(boxes, frame.origin);
+// One PVS at load, so that the first cell picked does not pay for compiling the culler.
+for (let id = 0; id < store.cellCount; id++) {
+  const rec = store.cell(id);
+  if (rec.vos.length > 0) {
+    pvs(frame, id, rec, tree);
+    break;
+  }
+}
 lap('store and box tree');
 
 // ---------------------------------------------------------------------------------------------
