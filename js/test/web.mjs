@@ -47,9 +47,13 @@ try {
   const t0 = Date.now();
   await page.goto('file://' + path.resolve(opts.page));
   await page.waitForFunction(() => window.vocc && window.vocc.ready, null, { timeout: 120000 });
+  // Two animation frames after ready: the first frame has been presented.
+  const presentedMs = await page.evaluate(
+    () => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(() => done(performance.now())))),
+  );
   const wallMs = Date.now() - t0;
   const load = await page.evaluate(() => ({ loadMs: window.vocc.loadMs, timings: window.vocc.timings }));
-  const report = { page: opts.page, wallMs, ...load };
+  const report = { page: opts.page, wallMs, presentedMs, ...load };
   const text = async (id) => (await page.textContent('#' + id)).trim();
   if (check) {
     // Click the cell: its centre on the ground, projected to the canvas.

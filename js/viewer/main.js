@@ -153,7 +153,7 @@ lap('triangulate');
 // The scene.
 
 const canvas = /** @type {HTMLCanvasElement} */ (el('view'));
-const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
 renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
 renderer.setClearColor(0xeef1f4);
 const scene = new THREE.Scene();
