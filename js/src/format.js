@@ -13,9 +13,12 @@
  * - one decoder reads both majors: a 1.0 VO (5 bytes) comes out as the 2.0 VO with exponents 0.
  *
  * Extending it (a minor version giving meaning to a reserved value, FORMAT.md 2.4): a store
- * flag is a bit of {@link KNOWN_FLAGS} and a field of {@link Store}; new record bytes belong to
- * the version's entry of {@link VERSIONS} (`voBytes`, `decodeVo`, `recordSize`), which every
- * length, offset and decoder below reads, and nowhere else.
+ * flag is a bit of {@link KNOWN_FLAGS} and a field of {@link Store}; an index value of the
+ * reserved range `11..=254` is a case of `countOf` (how many VOs it announces) and of
+ * `recordSize` (how many payload bytes its record takes), the only two places that read index
+ * values, with the record's new bytes read in `readRecord`; new VO bytes belong to the
+ * version's entry of {@link VERSIONS} (`voBytes`, `decodeVo`). Every length, offset and check
+ * below goes through these, so nothing else changes.
  */
 
 import { crc32, crcUpdate } from './crc.js';
