@@ -3,7 +3,7 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test test-long demo bench scale eval lint fresh-clone pictures fuzz header c-bench c-size
+.PHONY: build test test-long test-web web-bundle demo bench scale eval lint fresh-clone pictures fuzz header c-bench c-size
 
 build:
 	$(CARGO) build --release
@@ -11,7 +11,8 @@ build:
 # The whole test suite, as CI runs it: all tests, the embeddable core without the geometry stack
 # (and that it depends on thiserror alone), the C ABI (capi/: its tests, the header against
 # cbindgen, the C example against `vocc pvs`), the Python package (a wheel built with maturin in
-# a venv under target/py, then its pytest suite), formatting.
+# a venv under target/py, then its pytest suite), the JavaScript runtime (js/test.sh: node's test
+# runner against the CLI on Lyon, FORMAT.md's tables and the fuzz corpora), formatting.
 test:
 	$(CARGO) test --locked
 	$(CARGO) test --locked --no-default-features -p vocc -p vocc-capi --lib --test header
@@ -19,7 +20,21 @@ test:
 	  test "$$deps" = "thiserror " || { echo "runtime dependencies: $$deps(ARCHITECTURE.md invariant 9 allows thiserror alone)" >&2; exit 1; }
 	CARGO="$(CARGO)" examples/c/test.sh
 	CARGO="$(CARGO)" python/test.sh
+	CARGO="$(CARGO)" js/test.sh
 	$(CARGO) fmt --all -- --check
+
+# The viewer page in a real browser (js/test-web.sh): installs Chromium from the system packages
+# when it is missing (as root), the npm packages of js/ (npm ci), checks the committed bundle
+# js/dist/viewer.js and the runtime's types, then opens the Lyon page in headless Chromium, clicks
+# a cell, checks the PVS count shown against `vocc pvs`, times the load and the PVS builds, and
+# saves a screenshot in target/tmp/web/.
+test-web:
+	CARGO="$(CARGO)" js/test-web.sh
+
+# Rebuilds js/dist/viewer.js (three.js, the viewer and the runtime, bundled by esbuild), which
+# `vocc view` puts in every page; commit it with the sources.
+web-bundle:
+	cd js && npm ci --no-audit --no-fund && node viewer/build.mjs
 
 # The long versions of checks that `make test` runs on fewer cells: the incremental rebake tests
 # over every cell of Lyon and of a generated city (`make test` bakes one band of cells across

@@ -7,6 +7,7 @@
 //! Module wings:
 //! - [`scene`]: readers and the 2.5D blocker model (feature `bake`);
 //! - [`geom`]: the exact predicates (feature `bake`);
+//! - [`view`]: the viewer page, the scene's geometry as binary buffers (feature `bake`);
 //! - [`runtime`]: the store format and culler core, which builds without the geometry stack
 //!   (`--no-default-features`) so an engine can embed it.
 //!
@@ -32,3 +33,6 @@ pub mod eval;
 pub mod geom;
 #[cfg(feature = "bake")]
 pub mod scene;
+/// The viewer page of `vocc view`: a scene's geometry as typed arrays, and the HTML page.
+#[cfg(feature = "bake")]
+pub mod view;

@@ -22,6 +22,7 @@ mod stability;
 mod truth;
 mod umbra_cases;
 mod verifier;
+mod view;
 mod walls;
 
 /// Every `tests/*.rs` is a `mod` of this file or a `[[test]]` target of its own in Cargo.toml, so

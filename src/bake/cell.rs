@@ -65,6 +65,8 @@ impl CellSetup {
     /// The setup of cell `id`, or (as `Err`) its record when no generator has anything to do:
     /// empty when it has no eyes or no blocker that may support a VO, skipped when it lies
     /// wholly inside one blocker that stands above the eyes.
+    // The record (an inline list of 10 VOs) is the answer, not an error: no boxing.
+    #[allow(clippy::result_large_err)]
     pub(super) fn new(plan: &Plan, id: CellId) -> Result<CellSetup, CellRecord> {
         let f = &plan.frame;
         let cell = plan.cell_polygon(id);

@@ -29,6 +29,7 @@ mod progress;
 mod render;
 mod report;
 mod store;
+mod view;
 
 /// The exit status rule, shown by `--help`.
 const EXIT_STATUS: &str = "Exit status:
@@ -132,6 +133,8 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         blob: Option<PathBuf>,
     },
+    /// Write (or serve) a page that shows the city in 3D, the cells, a cell's VOs and its PVS.
+    View(view::ViewArgs),
     /// Load scene files and report objects, blockers, convex pieces, repairs and timings.
     Info {
         /// Scene files: GeoJSON, GeoPackage, FlatGeobuf or Shapefile footprints, OpenStreetMap PBF,
@@ -343,6 +346,7 @@ fn run(cli: Cli) -> Result<i32> {
             };
             store::export(store, cell, to)
         }
+        Command::View(a) => view::run(a),
         Command::Info { scene, read, json } => info::info(&scene, &read, json),
         Command::Render {
             debug,
