@@ -68,6 +68,9 @@ impl CellSetup {
     pub(super) fn new(plan: &Plan, id: CellId) -> Result<CellSetup, CellRecord> {
         let f = &plan.frame;
         let cell = plan.cell_polygon(id);
+        if !plan.eyes_fit(id) {
+            return Err(CellRecord::EMPTY);
+        }
         let ground = plan.ground_level(id);
         let Some(view) = f.cell_view(id, ground) else {
             return Err(CellRecord::EMPTY);

@@ -37,6 +37,7 @@ pub mod propose;
 pub mod quantize;
 pub mod select;
 pub mod slice;
+pub mod terrain;
 
 use glam::DVec2;
 use rstar::primitives::{GeomWithData, Rectangle};

@@ -133,6 +133,8 @@ pub struct Plan<'s> {
     pub(super) base: Vec<f64>,
     pub(super) top: Vec<f64>,
     pub occludees: Occludees,
+    /// On a terrain, every cell's ground level and whether its eyes fit the frame.
+    pub ground: Option<super::terrain::GroundTable>,
 }
 
 fn pow2_at_least(x: f64) -> f64 {
@@ -174,8 +176,10 @@ impl<'s> Plan<'s> {
         if nx * ny > 1 << 31 {
             return Err(BakeError::TooManyCells(nx * ny));
         }
-        let base: Vec<f64> = scene.blockers.iter().map(|b| b.base).collect();
-        let top: Vec<f64> = scene.blockers.iter().map(|b| b.top).collect();
+        // The objects' blockers, then the terrain's (scene/terrain.rs).
+        let all = || scene.blockers.iter().chain(scene.terrain_blockers());
+        let base: Vec<f64> = all().map(|b| b.base).collect();
+        let top: Vec<f64> = all().map(|b| b.top).collect();
         let (bmin, bmax) = base
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &b| {
@@ -191,29 +195,37 @@ impl<'s> Plan<'s> {
                 pow2_at_least(((bmax - bmin) / 255.0).max(GROUND_STEP_M)),
             )
         };
+        let grid = GridDescriptor {
+            min_x,
+            min_y,
+            cell_size: size,
+            nx: nx as u32,
+            ny: ny as u32,
+        };
+        // On a terrain, each cell stands on its least terrain height, and the eyes reach the
+        // greatest (bake/terrain.rs).
+        let ground = super::terrain::GroundTable::new(scene, &grid);
+        let (ground_z0, ground_step, rise) = match &ground {
+            Some(t) => (t.ground_z0, t.ground_step, t.rise),
+            None => (ground_z0, ground_step, 0.0),
+        };
         let quantum = pow2_at_least((0.5 * size + params.search_m) / (QUANT_STEPS / 2) as f64);
         let frame = Frame {
             origin: scene.origin.to_array(),
-            grid: GridDescriptor {
-                min_x,
-                min_y,
-                cell_size: size,
-                nx: nx as u32,
-                ny: ny as u32,
-            },
+            grid,
             quantum,
             eye_lo: e0,
-            eye_hi: e1,
+            eye_hi: e1 + rise,
             ground_z0,
             ground_step,
             h0: H0_M,
             h_ratio: H_RATIO,
         };
         let set = BlockerSet::new(
-            scene.blockers.iter().map(|b| b.polygon.clone()).collect(),
-            scene.blockers.iter().map(|b| b.top - b.base).collect(),
+            all().map(|b| b.polygon.clone()).collect(),
+            all().map(|b| b.top - b.base).collect(),
         )
-        .with_objects(scene.blockers.iter().map(|b| b.object).collect());
+        .with_objects(all().map(|b| b.object).collect());
         Ok(Plan {
             scene,
             frame,
@@ -223,6 +235,7 @@ impl<'s> Plan<'s> {
             top,
             occludees: Occludees::from_scene(scene),
             params,
+            ground,
         })
     }
 
@@ -274,6 +287,9 @@ impl<'s> Plan<'s> {
     /// ground, and where no blocker stands within the search radius.
     pub fn ground_level(&self, id: CellId) -> u8 {
         let f = &self.frame;
+        if let Some(t) = &self.ground {
+            return t.levels.get(id as usize).copied().unwrap_or(0);
+        }
         if !f.per_cell_ground() {
             return 0;
         }
@@ -297,6 +313,14 @@ impl<'s> Plan<'s> {
         bases.sort_by(f64::total_cmp);
         let m = bases[(bases.len() - 1) * GROUND_QUANTILE_PCT / 100];
         ((m - f.ground_z0) / f.ground_step).ceil().clamp(0.0, 255.0) as u8
+    }
+
+    /// Whether a camera anywhere on the cell's ground stands within its stored eye range (always
+    /// without a terrain; on one, not for the steepest cells, bake/terrain.rs).
+    pub fn eyes_fit(&self, id: CellId) -> bool {
+        self.ground
+            .as_ref()
+            .is_none_or(|t| t.fits.get(id as usize).copied().unwrap_or(false))
     }
 
     /// Bakes one cell.

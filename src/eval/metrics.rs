@@ -210,6 +210,7 @@ pub fn vo_rays(
     eyes: usize,
     points: usize,
     seed: u64,
+    eye_above: Option<(f64, f64)>,
 ) -> VoRays {
     use glam::DVec3;
     let f = store.frame();
@@ -231,11 +232,15 @@ pub fn vo_rays(
             continue;
         };
         for _ in 0..eyes {
-            let eye = DVec3::new(
-                r[0] + u() * (r[2] - r[0]),
-                r[1] + u() * (r[3] - r[1]),
-                view.e0 + u() * (view.e1 - view.e0),
-            );
+            let (x, y, s) = (r[0] + u() * (r[2] - r[0]), r[1] + u() * (r[3] - r[1]), u());
+            // On the terrain where there is one (a camera on the ground), as the ground truth.
+            let ground =
+                eye_above.and_then(|e| Some((e, caster.ground_height(glam::DVec2::new(x, y))?)));
+            let z = match ground {
+                Some(((lo, hi), g)) => g + lo + s * (hi - lo),
+                None => view.e0 + s * (view.e1 - view.e0),
+            };
+            let eye = DVec3::new(x, y, z);
             if caster.contains(eye).is_some() {
                 continue;
             }
@@ -265,10 +270,11 @@ pub fn vo_rays_all(
     eyes: usize,
     points: usize,
     seed: u64,
+    eye_above: Option<(f64, f64)>,
 ) -> VoRays {
     use rayon::prelude::*;
     ids.par_iter()
-        .map(|&id| vo_rays(caster, store, id, eyes, points, seed))
+        .map(|&id| vo_rays(caster, store, id, eyes, points, seed, eye_above))
         .reduce(VoRays::default, |a, b| VoRays {
             rays: a.rays + b.rays,
             reached: a.reached + b.reached,

@@ -222,7 +222,7 @@ pub fn dataset_section(
     let ev = eval_cells(&s, &store, &tree, &all, &vs_all);
     let sm = summarize(&s, &ev);
     let (med, p95) = bake_ms(&main.cells);
-    let rays = vo_rays_all(&caster, &store, &all, 16, 16, p.seed);
+    let rays = vo_rays_all(&caster, &store, &all, 16, 16, p.seed, p.truth.eye_above);
     let nbytes = main.bytes.len() as f64 / store.cell_count().max(1) as f64;
 
     let _ = writeln!(md, "### Default bake, 100 m cells, every cell\n");
@@ -606,7 +606,7 @@ pub fn dataset_section(
             if size == 100.0 {
                 rays
             } else {
-                vo_rays_all(&caster, &st, &ids, 16, 16, p.seed)
+                vo_rays_all(&caster, &st, &ids, 16, 16, p.seed, p.truth.eye_above)
             },
         ));
         let ms = bake_ms(&v.cells).0;
