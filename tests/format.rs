@@ -116,6 +116,7 @@ fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
         a: QPoint::fine(x1, y1),
         b: QPoint::fine(x2, y2),
         level,
+        deep: false,
     }
 }
 
@@ -130,11 +131,13 @@ fn doc_cells() -> Vec<CellRecord> {
         a: p(3, 194, 406),
         b: p(3, 344, 406),
         level: 20,
+        deep: false,
     };
     let north = QVo {
         a: p(0, 376, 346),
         b: p(2, 286, 456),
         level: 16,
+        deep: false,
     };
     vec![
         CellRecord::new(4, &[q(196, 376, 336, 376, 5), far, north]).unwrap(),
@@ -1027,6 +1030,7 @@ fn s13_degenerate_vo() {
         a: p(5, 0, 511),
         b: p(5, 0, 511),
         level: 31,
+        deep: false,
     };
     assert_eq!(
         Store::parse(&with_vo(&docs()[0], 2, &far.to_bytes())).unwrap_err(),
@@ -1149,6 +1153,7 @@ fn s19_non_canonical_endpoint() {
         a,
         b: p(0, 336, 376),
         level: 5,
+        deep: false,
     };
     assert_eq!(
         Store::parse(&with_vo(d, 0, &bad.to_bytes())).unwrap_err(),
@@ -1164,6 +1169,7 @@ fn s19_non_canonical_endpoint() {
         a: p(3, 194, 406),
         b: p(4, 256 + 44, 256 + 75),
         level: 20,
+        deep: false,
     };
     assert_eq!(bad.b.canonical(), p(3, 344, 406));
     assert_eq!(
@@ -1180,6 +1186,7 @@ fn s19_non_canonical_endpoint() {
         a,
         b: p(0, 196, 376),
         level: 5,
+        deep: false,
     };
     assert_eq!(
         Store::parse(&with_vo(d, 2, &twice.to_bytes())).unwrap_err(),
@@ -1210,6 +1217,7 @@ fn s20_exponents_levels_and_scene_values_are_accepted() {
             a: p(e, 511, 0),
             b: p(7 - e, 0, 300 + e as u16),
             level: 24 + e,
+            deep: false,
         })
         .collect();
     assert!(vos.iter().all(|v| v.is_canonical() && !v.is_degenerate()));
@@ -1502,6 +1510,7 @@ fn b12_non_canonical_endpoint() {
         a: p(0, 196, 376),
         b: p(1, 256 + 40, 256 + 60),
         level: 5,
+        deep: false,
     };
     assert_eq!(bad.b.canonical(), p(0, 336, 376));
     assert_eq!(
@@ -1556,11 +1565,13 @@ fn encoder_refusals() {
         q(0, 0, 1, 1, 255),
         QVo {
             a: p(8, 0, 0),
-            ..good
+            ..good,
+            deep: false,
         },
         QVo {
             b: p(255, 0, 0),
-            ..good
+            ..good,
+            deep: false,
         },
     ];
     for bad in out_of_range {
@@ -1578,7 +1589,8 @@ fn encoder_refusals() {
     // 0's record is 19 bytes; the doc's scene section takes 9 more bytes of CRS name).
     let non_canonical = QVo {
         a: p(1, 256, 300),
-        ..good
+        ..good,
+        deep: false,
     };
     for (bad, err) in [
         (
@@ -1755,7 +1767,7 @@ fn arb_point() -> impl Strategy<Value = QPoint> {
 /// A 2.0 VO: canonical endpoints of any exponent, levels 0..32.
 fn arb_qvo() -> impl Strategy<Value = QVo> {
     (arb_point(), arb_point(), 0u8..32)
-        .prop_map(|(a, b, level)| QVo { a, b, level })
+        .prop_map(|(a, b, level)| QVo { a, b, level, deep: false })
         .prop_filter("degenerate", |v| !v.is_degenerate())
 }
 

@@ -91,6 +91,7 @@ fn store_bytes() -> Vec<u8> {
                             y: 100 - j,
                         },
                         level: (i % 32) as u8,
+                        deep: false,
                     })
                     .collect();
                 CellRecord::new((i % 7) as u8, &vos).unwrap()
@@ -239,6 +240,7 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
         },
         b: QPoint::fine(1, 2),
         level: 3,
+        deep: false,
     };
     b[payload + 1..payload + 7].copy_from_slice(&non_canonical.to_bytes());
     fix_crc(&mut b);

@@ -396,6 +396,7 @@ fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
         a: QPoint::fine(0, 0),
         b: QPoint::fine(0, 0),
         level: 0,
+        deep: false,
     }; VOCC_MAX_VOS];
     for (k, (v, q)) in vos.iter().zip(qs.iter_mut()).enumerate() {
         *q = QVo {
@@ -410,6 +411,7 @@ fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
                 y: v.y2,
             },
             level: v.level,
+            deep: false,
         };
         if !q.in_range() {
             return Err(fail(

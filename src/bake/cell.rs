@@ -66,6 +66,13 @@ impl CellSetup {
     /// empty when it has no eyes or no blocker that may support a VO, skipped when it lies
     /// wholly inside one blocker that stands above the eyes.
     pub(super) fn new(plan: &Plan, id: CellId) -> Result<CellSetup, CellRecord> {
+        Self::new_with(plan, id, false)
+    }
+
+    /// [`CellSetup::new`], with the VOs' bottom at the frame's lowest ground level when `deep`
+    /// (format 2.1's deep VOs, bake/terrain.rs): rule 2 then takes that bottom, so only
+    /// blockers reaching that low support them, and rule 3 hides what lies below the cell.
+    pub(super) fn new_with(plan: &Plan, id: CellId, deep: bool) -> Result<CellSetup, CellRecord> {
         let f = &plan.frame;
         let cell = plan.cell_polygon(id);
         if !plan.eyes_fit(id) {
@@ -75,7 +82,12 @@ impl CellSetup {
         let Some(view) = f.cell_view(id, ground) else {
             return Err(CellRecord::EMPTY);
         };
-        let (g, e0, e1) = (f.ground_z(ground), view.e0, view.e1);
+        let g = if deep {
+            f.ground_z0
+        } else {
+            f.ground_z(ground)
+        };
+        let (e0, e1) = (view.e0, view.e1);
         // A cell wholly inside one blocker that stands above the eyes holds no eye.
         let inside = plan.set.in_box(cell[0], cell[2]).any(|i| {
             let p = &plan.set.polys[i as usize];

@@ -251,6 +251,9 @@ impl<'a> Certifier<'a> {
             stats.checks += checks;
             match r {
                 Ok(mut q) => {
+                    // Certified for a bottom below the cell's ground (`ground_z0`, a deep cell,
+                    // bake/terrain.rs): stored as a deep VO, which stands from there.
+                    q.deep = self.heights.2 < f.ground_z(self.ground);
                     let mut geom = f.dequantize(self.id, self.ground, &q)?;
                     stats.stored += 1;
                     if n > 0 || checks > 1 {

@@ -340,7 +340,28 @@ impl<'s> Plan<'s> {
         };
         stats.levels = c.slices.clone();
         match self.params.generator {
-            Generator::Long => super::long::long_vos(self, &c, stats),
+            Generator::Long => {
+                let rec = super::long::long_vos(self, &c, stats);
+                // On a terrain, the cell is baked again with deep VOs (bottom at the lowest
+                // ground level, bake/terrain.rs); the record that hides more is kept.
+                if self.ground.is_none() || c.g <= self.frame.ground_z0 {
+                    return rec;
+                }
+                let Ok(d) = CellSetup::new_with(self, id, true) else {
+                    return rec;
+                };
+                let mut deep = CellStats {
+                    levels: d.slices.clone(),
+                    ..CellStats::default()
+                };
+                let drec = super::long::long_vos(self, &d, &mut deep);
+                if deep.hidden_cost > stats.hidden_cost {
+                    *stats = deep;
+                    drec
+                } else {
+                    rec
+                }
+            }
             Generator::Growth => super::growth::growth_vos(self, &c, stats),
         }
     }

@@ -97,7 +97,23 @@ impl GroundTable {
             .collect();
         let mut sorted: Vec<f64> = rises.iter().copied().filter(|r| r.is_finite()).collect();
         sorted.sort_by(f64::total_cmp);
-        let q = sorted[((sorted.len() - 1) as f64 * RISE_QUANTILE).round() as usize];
+        let quantile = std::env::var("VOCC_RISE_Q")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(RISE_QUANTILE);
+        let q = sorted[((sorted.len() - 1) as f64 * quantile).round() as usize];
+        if std::env::var_os("VOCC_DEBUG_RISE").is_some() {
+            let pick = |p: f64| sorted[((sorted.len() - 1) as f64 * p).round() as usize];
+            eprintln!(
+                "rises: p10 {:.2} p25 {:.2} p50 {:.2} p75 {:.2} p90 {:.2} max {:.2}",
+                pick(0.1),
+                pick(0.25),
+                pick(0.5),
+                pick(0.75),
+                pick(0.9),
+                pick(1.0)
+            );
+        }
         // On the step grid, so that the frame's eye height reads back exactly.
         let rise = (q / GROUND_STEP_M).ceil() * GROUND_STEP_M;
         let fits = rises.iter().map(|&r| r.is_finite() && r <= rise).collect();

@@ -938,6 +938,7 @@ mod tests {
             a: QPoint::fine(k(a[0], 250.0), k(a[1], 250.0)),
             b: QPoint::fine(k(b[0], 250.0), k(b[1], 250.0)),
             level,
+            deep: false,
         }
     }
 
@@ -1067,6 +1068,7 @@ mod tests {
                     a: QPoint::fine((r.next() * 512.0) as u16, (r.next() * 512.0) as u16),
                     b: QPoint::fine((r.next() * 512.0) as u16, (r.next() * 512.0) as u16),
                     level: (r.next() * 16.0) as u8,
+                    deep: false,
                 }
             };
             if !q.is_degenerate() {

@@ -10,7 +10,8 @@
 //!   exact in f64, so the bake's verifier checks exactly the segment the runtime uses;
 //! - the VO top of level `k` (`0..32`; format 1: `0..16`) is `e1 + h0 * (h_ratio^k - 1)`, computed by one function
 //!   ([`Frame::vo_top`]) that the bake also uses: the bake checks what the runtime will read;
-//! - the VO bottom `g` is the cell's ground, and the eyes stand at `g + eye_lo ..= g + eye_hi`.
+//! - the VO bottom is the cell's ground `g` (or, for a deep VO of format 2.1, `ground_z0`), and
+//!   the eyes stand at `g + eye_lo ..= g + eye_hi`.
 
 use crate::runtime::grid::{CellId, GridDescriptor};
 
@@ -110,12 +111,16 @@ impl QPoint {
     }
 }
 
-/// One VO as stored: two endpoints and a height level.
+/// One VO as stored: two endpoints, a height level and where its bottom stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct QVo {
     pub a: QPoint,
     pub b: QPoint,
     pub level: u8,
+    /// Store format 2.1 (bit 47): the VO stands from the frame's lowest ground level
+    /// (`ground_z0`) rather than from its cell's ground, so that it may hide what lies below the
+    /// cell (downhill). Its supporters reach that low (rule 2; ARCHITECTURE.md, "Terrain").
+    pub deep: bool,
 }
 
 /// Bytes of a VO in store format 2.
@@ -126,18 +131,20 @@ pub const VO_BYTES_V1: usize = 5;
 impl QVo {
     /// The 6 stored bytes of format 2: a 48-bit little-endian word with endpoint `a` in bits
     /// 0..21 (`e` 0..3, `x` 3..12, `y` 12..21), endpoint `b` in 21..42 (same layout), the level
-    /// in 42..47, and bit 47 clear (reserved). Fields must be in range.
+    /// in 42..47, and bit 47 the deep flag (2.1; clear in 2.0). Fields must be in range.
     pub fn to_bytes(&self) -> [u8; VO_BYTES] {
         let p = |q: &QPoint| -> u64 {
             (q.e as u64 & 0x7) | (q.x as u64 & 0x1ff) << 3 | (q.y as u64 & 0x1ff) << 12
         };
-        let w: u64 = p(&self.a) | p(&self.b) << 21 | (self.level as u64 & 0x1f) << 42;
+        let w: u64 = p(&self.a)
+            | p(&self.b) << 21
+            | (self.level as u64 & 0x1f) << 42
+            | (self.deep as u64) << 47;
         let b = w.to_le_bytes();
         [b[0], b[1], b[2], b[3], b[4], b[5]]
     }
 
-    /// Inverse of [`QVo::to_bytes`] for every 6-byte value whose reserved bit 47 is clear (the
-    /// decoders check that bit, [`QVo::reserved_bit`]).
+    /// Inverse of [`QVo::to_bytes`] for every 6-byte value.
     pub fn from_bytes(b: [u8; VO_BYTES]) -> QVo {
         let w = u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], 0, 0]);
         let p = |v: u64| QPoint {
@@ -149,10 +156,11 @@ impl QVo {
             a: p(w),
             b: p(w >> 21),
             level: (w >> 42 & 0x1f) as u8,
+            deep: w >> 47 & 1 == 1,
         }
     }
 
-    /// Bit 47 of a format-2 VO, reserved: a format 2.0 decoder rejects a VO that sets it.
+    /// Bit 47 of a format-2 VO: the deep flag of format 2.1, which a 2.0 decoder rejects.
     pub fn reserved_bit(b: [u8; VO_BYTES]) -> bool {
         b[5] & 0x80 != 0
     }
@@ -177,12 +185,13 @@ impl QVo {
             a: QPoint::fine((w & 0x1ff) as u16, (w >> 9 & 0x1ff) as u16),
             b: QPoint::fine((w >> 18 & 0x1ff) as u16, (w >> 27 & 0x1ff) as u16),
             level: (w >> 36 & 0xf) as u8,
+            deep: false,
         }
     }
 
     /// Whether store format 1 can hold this VO: exponents 0, level below 16.
     pub fn fits_v1(&self) -> bool {
-        self.a.e == 0 && self.b.e == 0 && self.level < HEIGHT_LEVELS_V1
+        self.a.e == 0 && self.b.e == 0 && self.level < HEIGHT_LEVELS_V1 && !self.deep
     }
 
     /// Whether every field lies in its range (format 2).
@@ -254,14 +263,16 @@ impl Frame {
         e1 + self.h0 * (pow_u8(self.h_ratio, level) - 1.0)
     }
 
-    /// The geometry of a stored VO of cell `id` standing on ground level `ground`.
+    /// The geometry of a stored VO of cell `id` standing on ground level `ground`: from the
+    /// cell's ground, or from `ground_z0` for a deep VO (format 2.1), to the top of its level
+    /// above the cell's top eye.
     pub fn dequantize(&self, id: CellId, ground: u8, q: &QVo) -> Option<VoGeom> {
         let c = self.cell_centre(id)?;
         let g = self.ground_z(ground);
         Some(VoGeom {
             a: add(c, q.a.offset(self.quantum)),
             b: add(c, q.b.offset(self.quantum)),
-            g,
+            g: if q.deep { self.ground_z0 } else { g },
             h: self.vo_top(g + self.eye_hi, q.level),
         })
     }
@@ -299,6 +310,7 @@ mod tests {
             a: QPoint { e: 1, x: 2, y: 3 },
             b: QPoint { e: 7, x: 511, y: 4 },
             level: 31,
+            deep: false,
         };
         // 1 | 2<<3 | 3<<12 | (7 | 511<<3 | 4<<12)<<21 | 31<<42
         let w: u64 = 1 | 2 << 3 | 3 << 12 | (7 | 511 << 3 | 4 << 12) << 21 | 31 << 42;
@@ -314,6 +326,9 @@ mod tests {
             assert_eq!(QVo::from_bytes(b).to_bytes(), b);
         }
         assert!(QVo::reserved_bit([0, 0, 0, 0, 0, 0x80]));
+        let deep = QVo { deep: true, ..q };
+        assert_eq!(deep.to_bytes(), [0x11, 0x30, 0xe0, 0xff, 0x09, 0xfc]);
+        assert_eq!(QVo::from_bytes(deep.to_bytes()), deep);
     }
 
     #[test]
@@ -322,6 +337,7 @@ mod tests {
             a: QPoint::fine(1, 2),
             b: QPoint::fine(3, 511),
             level: 15,
+            deep: false,
         };
         // 1 | 2<<9 | 3<<18 | 511<<27 | 15<<36
         assert_eq!(q.to_bytes_v1(), [0x01, 0x04, 0x0c, 0xf8, 0xff]);
@@ -401,6 +417,7 @@ mod tests {
             a: QPoint { e: 0, x: 0, y: 511 },
             b: QPoint { e: 7, x: 511, y: 0 },
             level: 0,
+            deep: false,
         };
         let g = f.dequantize(4, 0, &q).unwrap();
         assert_eq!(g.a, [150.0 - 64.0, 150.0 + 63.75]);

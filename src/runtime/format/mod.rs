@@ -51,8 +51,11 @@ pub const BLOB_MAGIC: [u8; 4] = *b"VOCB";
 pub const MAJOR: u16 = 2;
 /// The older major version this module still reads (FORMAT.md section 12).
 pub const MAJOR_V1: u16 = 1;
-/// The minor version this module writes (it reads every minor of both majors).
+/// The minor version this module writes for a store without deep VOs (it reads every minor of
+/// both majors).
 pub const MINOR: u16 = 0;
+/// The minor version of a store that holds a deep VO (bit 47, FORMAT.md 3.1): 2.1.
+pub const MINOR_DEEP: u16 = 1;
 /// Length of a store file's header.
 pub const HEADER_LEN: usize = 136;
 /// Length of the fixed part of a 2.0 store's scene section (`objects`, `scene`, `crs_len`),
@@ -269,6 +272,7 @@ mod test_util {
             a: QPoint::fine(x1, y1),
             b: QPoint::fine(x2, y2),
             level,
+            deep: false,
         }
     }
 }

@@ -20,6 +20,7 @@ const NO_VO: QVo = QVo {
     a: QPoint::fine(0, 0),
     b: QPoint::fine(0, 0),
     level: 0,
+    deep: false,
 };
 
 /// At most [`MAX_VOS_PER_CELL`] VOs, inline (no heap). Dereferences to `&[QVo]`.
@@ -187,15 +188,8 @@ pub(super) fn read_record(
         let q = match version {
             Version::V1 => QVo::from_bytes_v1(r.take::<VO_BYTES_V1>().ok_or_else(short)?),
             Version::V2 => {
-                let b = r.take::<VO_BYTES>().ok_or_else(short)?;
-                if QVo::reserved_bit(b) {
-                    return Err(FormatError::ReservedVoBit {
-                        cell,
-                        vo: k,
-                        offset: at,
-                    });
-                }
-                QVo::from_bytes(b)
+                // Bit 47 is the deep flag of 2.1 (FORMAT.md 3.1), read by this decoder.
+                QVo::from_bytes(r.take::<VO_BYTES>().ok_or_else(short)?)
             }
         };
         check_vo(cell, k, &q, at)?;

@@ -12,7 +12,7 @@ use super::frame::{push_frame, read_frame, validate_frame, validate_frame_of};
 use super::records::{check_record, count_of, push_record, read_record, record_size, CellRecord};
 use super::{
     exact_length, u32_at, FormatError, Reader, Version, CELLS_PER_BLOCK, CRC_OFFSET, FRAME_LEN,
-    HEADER_LEN, MAJOR, MAX_CRS_LEN, MINOR, SCENE_FIXED_LEN, SKIPPED, STORE_MAGIC,
+    HEADER_LEN, MAJOR, MAX_CRS_LEN, MINOR, MINOR_DEEP, SCENE_FIXED_LEN, SKIPPED, STORE_MAGIC,
 };
 use crate::runtime::crc::{crc32, Crc32};
 use crate::runtime::frame::Frame;
@@ -398,7 +398,9 @@ pub fn encode_store_with(
     let mut out = Vec::with_capacity((payload_offset + payload_len) as usize);
     out.extend_from_slice(&STORE_MAGIC);
     out.extend_from_slice(&MAJOR.to_le_bytes());
-    out.extend_from_slice(&MINOR.to_le_bytes());
+    // The lowest minor whose additions the file uses (FORMAT.md 2.4): 2.1 with a deep VO.
+    let deep = cells.iter().any(|r| r.vos().iter().any(|q| q.deep));
+    out.extend_from_slice(&if deep { MINOR_DEEP } else { MINOR }.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
     push_frame(&mut out, frame);
     out.extend_from_slice(&payload_len32.to_le_bytes());
