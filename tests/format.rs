@@ -1118,28 +1118,33 @@ fn s17_crs_not_utf8() {
 }
 
 #[test]
-fn s18_reserved_vo_bit() {
+fn s18_deep_vo_bit_is_read_in_2_1() {
+    // Bit 47 was reserved in 2.0; 2.1 reads it as the deep flag (FORMAT.md 3.1): the VO
+    // stands from ground_z0. The same bytes otherwise.
     let d = &docs()[0];
     let mut s = d.bytes.clone();
     s[d.vo(1) + 5] |= 0x80; // bit 47 of cell 0's VO 1
     fix_store_crc(&mut s);
-    assert_eq!(
-        Store::parse(&s).unwrap_err(),
-        FormatError::ReservedVoBit {
-            cell: 0,
-            vo: 1,
-            offset: 0xac
-        }
-    );
-    // Checked before the endpoints: an all-ones VO sets it and is neither canonical nor sane.
-    assert_eq!(
+    let st = Store::parse(&s).unwrap();
+    let rec = st.cell(0).unwrap();
+    assert!(rec.vos()[1].deep && !rec.vos()[0].deep && !rec.vos()[2].deep);
+    let g = st
+        .frame()
+        .dequantize(0, rec.ground(), &rec.vos()[1])
+        .unwrap();
+    assert_eq!(g.g, 160.0); // ground_z0, not the cell's 162
+    assert_eq!(g.h, 506.9446951953614);
+    // Re-encoded: the same records, minor 1.
+    let mut cells = doc_cells();
+    cells[0] = rec;
+    let again = encode_store_with(&doc_frame(), &cells, &doc_scene()).unwrap();
+    assert_eq!(&again[8..12], &[2, 0, 1, 0]);
+    assert_eq!(Store::parse(&again).unwrap().cell(0).unwrap(), rec);
+    // An all-ones VO is deep, canonical and degenerate (both ends (7, 511, 511)).
+    assert!(matches!(
         Store::parse(&with_vo(d, 0, &[0xff; 6])).unwrap_err(),
-        FormatError::ReservedVoBit {
-            cell: 0,
-            vo: 0,
-            offset: 0xa6
-        }
-    );
+        FormatError::DegenerateVo { .. }
+    ));
 }
 
 #[test]
@@ -1486,19 +1491,13 @@ fn b10_empty_and_skipped_blobs_are_14_bytes() {
 }
 
 #[test]
-fn b11_reserved_vo_bit() {
+fn b11_deep_vo_bit_is_read_in_2_1() {
     let f = doc_frame();
     let mut b = doc_hex("blob-cell0");
     b[0x17 + 5] |= 0x80; // bit 47 of VO 2
     fix_blob_crc(&mut b);
-    assert_eq!(
-        decode_blob(&f, &b).unwrap_err(),
-        FormatError::ReservedVoBit {
-            cell: 0,
-            vo: 2,
-            offset: 0x17
-        }
-    );
+    let (_, rec) = decode_blob(&f, &b).unwrap();
+    assert!(rec.vos()[2].deep);
 }
 
 #[test]
@@ -1565,13 +1564,11 @@ fn encoder_refusals() {
         q(0, 0, 1, 1, 255),
         QVo {
             a: p(8, 0, 0),
-            ..good,
-            deep: false,
+            ..good
         },
         QVo {
             b: p(255, 0, 0),
-            ..good,
-            deep: false,
+            ..good
         },
     ];
     for bad in out_of_range {
@@ -1589,8 +1586,7 @@ fn encoder_refusals() {
     // 0's record is 19 bytes; the doc's scene section takes 9 more bytes of CRS name).
     let non_canonical = QVo {
         a: p(1, 256, 300),
-        ..good,
-        deep: false,
+        ..good
     };
     for (bad, err) in [
         (
@@ -1767,7 +1763,12 @@ fn arb_point() -> impl Strategy<Value = QPoint> {
 /// A 2.0 VO: canonical endpoints of any exponent, levels 0..32.
 fn arb_qvo() -> impl Strategy<Value = QVo> {
     (arb_point(), arb_point(), 0u8..32)
-        .prop_map(|(a, b, level)| QVo { a, b, level, deep: false })
+        .prop_map(|(a, b, level)| QVo {
+            a,
+            b,
+            level,
+            deep: false,
+        })
         .prop_filter("degenerate", |v| !v.is_degenerate())
 }
 
@@ -1904,7 +1905,9 @@ fn check_canonical(bytes: &[u8], s: &Store<'_>) -> Result<(), TestCaseError> {
         m => panic!("major {m} accepted"),
     };
     let mut expect = bytes.to_vec();
-    expect[10..12].fill(0);
+    // The encoder writes the lowest minor its records need: 1 with a deep VO (2.1), else 0.
+    let deep = recs.iter().any(|r| r.vos().iter().any(|q| q.deep));
+    expect[10..12].copy_from_slice(&[(deep && s.major() == 2) as u8, 0]);
     fix_store_crc(&mut expect);
     prop_assert_eq!(again, expect);
     match encode_store(s.frame(), &recs) {

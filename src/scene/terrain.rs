@@ -635,13 +635,15 @@ mod tests {
     #[test]
     fn coverage_is_refused_over_holes_and_outside() {
         let t = Terrain::new(Vec::new(), grid(8, 10.0, |_, _| 0.0, Some((3, 3)))).unwrap();
-        assert!(t.covers(DVec2::new(0.0, 0.0), DVec2::new(29.5, 29.5)));
-        // Touching the hole is refused: the closed square meets its boundary.
-        assert!(!t.covers(DVec2::new(0.0, 0.0), DVec2::new(30.0, 30.0)));
+        assert!(t.covers(DVec2::new(0.5, 0.5), DVec2::new(29.5, 29.5)));
+        // Touching the hole, or the terrain's outer edge, is refused: the closed square meets
+        // the boundary.
+        assert!(!t.covers(DVec2::new(0.5, 0.5), DVec2::new(30.0, 30.0)));
+        assert!(!t.covers(DVec2::new(0.0, 0.5), DVec2::new(29.5, 29.5)));
         assert!(!t.covers(DVec2::new(25.0, 25.0), DVec2::new(35.0, 35.0)));
         assert!(!t.covers(DVec2::new(31.0, 31.0), DVec2::new(39.0, 39.0)));
         assert!(!t.covers(DVec2::new(70.0, 70.0), DVec2::new(81.0, 75.0)));
-        assert!(t.covers(DVec2::new(40.0, 0.0), DVec2::new(80.0, 80.0)));
+        assert!(t.covers(DVec2::new(40.5, 0.5), DVec2::new(79.5, 79.5)));
         // A flat terrain merges into few squares.
         assert!(t.blockers.len() < 30, "{}", t.blockers.len());
     }
