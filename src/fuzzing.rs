@@ -212,7 +212,7 @@ fn push_v1_record(out: &mut Vec<u8>, f: &Frame, rec: &CellRecord) {
 /// Runs the culler on cell `id` over boxes around it: the ids come out ascending and in range,
 /// and a box that contains the cell (it holds the eyes) is never culled.
 fn check_culler(f: &Frame, id: CellId, rec: &CellRecord) {
-    let Some(view) = f.cell_view(id, rec.ground()) else {
+    let Some(view) = f.cell_view(id, rec.stand()) else {
         panic!("cell {id} of an accepted frame has no view");
     };
     let [x0, y0, x1, y1] = view.rect;

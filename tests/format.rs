@@ -1130,7 +1130,7 @@ fn s18_deep_vo_bit_is_read_in_2_1() {
     assert!(rec.vos()[1].deep && !rec.vos()[0].deep && !rec.vos()[2].deep);
     let g = st
         .frame()
-        .dequantize(0, rec.ground(), &rec.vos()[1])
+        .dequantize(0, rec.stand(), &rec.vos()[1])
         .unwrap();
     assert_eq!(g.g, 160.0); // ground_z0, not the cell's 162
     assert_eq!(g.h, 506.9446951953614);

@@ -692,7 +692,7 @@ pub unsafe extern "C" fn vocc_vo_geometry(
             )
         })?;
         let g = f
-            .dequantize(id, rec.ground(), q)
+            .dequantize(id, rec.stand(), q)
             .ok_or_else(|| fail(VOCC_ERR_OUTSIDE_GRID, format!("cell {id}")))?;
         *get_mut(out, "out")? = VoccVoGeom {
             a: g.a,

@@ -19,7 +19,7 @@ use super::slice::{area_angle, choose_levels, Support};
 use super::{bounds, BlockerSet};
 use crate::geom::predicates::{convex_interiors_disjoint, point_in_convex, Containment};
 use crate::runtime::format::CellRecord;
-use crate::runtime::frame::{CellView, QVo, VoGeom, HEIGHT_LEVELS};
+use crate::runtime::frame::{CellGround, CellView, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
 
 /// The blockers the VOs of a cell may use: those whose boxes meet the cell grown by `search_m`
@@ -41,7 +41,7 @@ pub(super) struct CellSetup {
     /// The cell's polygon, counter-clockwise, local frame.
     pub(super) cell: [DVec2; 4],
     /// The cell's ground level (the frame's ground byte), and its eyes as rule 3 sees them.
-    pub(super) ground: u8,
+    pub(super) ground: CellGround,
     pub(super) view: CellView,
     /// The height of that ground level, metres (local frame).
     pub(super) g: f64,
@@ -78,14 +78,14 @@ impl CellSetup {
         if !plan.eyes_fit(id) {
             return Err(CellRecord::EMPTY);
         }
-        let ground = plan.ground_level(id);
+        let ground = plan.stand(id);
         let Some(view) = f.cell_view(id, ground) else {
             return Err(CellRecord::EMPTY);
         };
         let g = if deep {
             f.ground_z0
         } else {
-            f.ground_z(ground)
+            f.ground_z(ground.level)
         };
         let (e0, e1) = (view.e0, view.e1);
         // A cell wholly inside one blocker that stands above the eyes holds no eye.
@@ -169,7 +169,13 @@ impl CellSetup {
         all.dedup();
         stats.hidden_cost = plan.occludees.cost_of(&all);
         // A cell without VOs stores no ground byte: its ground is 0 in the record.
-        let ground = if vos.is_empty() { 0 } else { ground };
-        CellRecord::new(ground, &vos).expect("greedy stops at max_vos, checked <= 10 in Plan::new")
+        let ground = if vos.is_empty() {
+            CellGround::default()
+        } else {
+            ground
+        };
+        CellRecord::new(ground.level, &vos)
+            .expect("greedy stops at max_vos, checked <= 10 in Plan::new")
+            .with_rise(ground.rise)
     }
 }

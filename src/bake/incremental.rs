@@ -182,6 +182,7 @@ impl CellHashes {
         }
         if let Some(t) = &plan.ground {
             g.bytes(&t.levels);
+            g.bytes(&t.rises);
             for &f in &t.fits {
                 g.word(f as u64);
             }

@@ -205,9 +205,9 @@ impl<'s> Plan<'s> {
         // On a terrain, each cell stands on its least terrain height, and the eyes reach the
         // greatest (bake/terrain.rs).
         let ground = super::terrain::GroundTable::new(scene, &grid);
-        let (ground_z0, ground_step, rise) = match &ground {
-            Some(t) => (t.ground_z0, t.ground_step, t.rise),
-            None => (ground_z0, ground_step, 0.0),
+        let (ground_z0, ground_step) = match &ground {
+            Some(t) => (t.ground_z0, t.ground_step),
+            None => (ground_z0, ground_step),
         };
         let quantum = pow2_at_least((0.5 * size + params.search_m) / (QUANT_STEPS / 2) as f64);
         let frame = Frame {
@@ -215,7 +215,7 @@ impl<'s> Plan<'s> {
             grid,
             quantum,
             eye_lo: e0,
-            eye_hi: e1 + rise,
+            eye_hi: e1,
             ground_z0,
             ground_step,
             h0: H0_M,
@@ -313,6 +313,18 @@ impl<'s> Plan<'s> {
         bases.sort_by(f64::total_cmp);
         let m = bases[(bases.len() - 1) * GROUND_QUANTILE_PCT / 100];
         ((m - f.ground_z0) / f.ground_step).ceil().clamp(0.0, 255.0) as u8
+    }
+
+    /// Where the cell stands: its ground level and, on a terrain, its rise (bake/terrain.rs).
+    pub fn stand(&self, id: CellId) -> crate::runtime::frame::CellGround {
+        crate::runtime::frame::CellGround {
+            level: self.ground_level(id),
+            rise: self
+                .ground
+                .as_ref()
+                .and_then(|t| t.rises.get(id as usize).copied())
+                .unwrap_or(0),
+        }
     }
 
     /// Whether a camera anywhere on the cell's ground stands within its stored eye range (always

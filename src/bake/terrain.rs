@@ -10,24 +10,20 @@
 //! A camera stands at `T(p) + e`, `e` in `[eye_lo, eye_hi]`, over a point `p` of the cell where
 //! the terrain is (and, where the terrain has a hole, between the least and greatest heights of
 //! the triangles that meet the cell). With `gmin <= T(p) <= gmax` over the cell
-//! ([`crate::scene::Terrain::range`], bounds over the triangles meeting the cell) and
-//! `g = ground_z0 + L * step <= gmin`, every camera lies in `[g + eye_lo, g + rise + eye_hi]`
-//! whenever `rise >= gmax - g`. The store keeps one rise for all cells, in the frame:
-//! `eye_hi(frame) = eye_hi + R`. A cell whose own rise `gmax - g` exceeds `R` (a steep cell)
-//! gets no VO (it culls nothing), so the stored eye range `[g + eye_lo, g + eye_hi(frame)]` of
-//! every cell with VOs holds every camera of that cell. Rules 2 and 3 take that range as
-//! `[e0, e1]` and the VO's bottom as `g`, unchanged: their proofs hold for any eye range
-//! containing the cameras.
-//! Invariants: a function of the scene's terrain, the grid and the eye heights alone (so of
-//! what the frame records); cells with no terrain triangle get no VO.
+//! ([`crate::scene::Terrain::range`], bounds over the triangles meeting the cell),
+//! `g = ground_z0 + L * step <= gmin` and `rise = R * step >= gmax - g`, every camera lies in
+//! `[g + eye_lo, g + R * step + eye_hi]`: the cell's stored eye range (format 2.1 stores `R`
+//! beside `L`). Rules 2 and 3 take that range as `[e0, e1]`, and the VO's bottom as `g` (or
+//! `ground_z0` for a deep VO), unchanged: their proofs hold for any eye range containing the
+//! cameras. A cell whose top eye would pass level 255, or that no terrain triangle meets, gets
+//! no VO.
+//! Invariants: a function of the scene's terrain and the grid alone; `L + R <= 255`.
 
 use glam::DVec2;
 
 use crate::runtime::grid::GridDescriptor;
 use crate::scene::Scene;
 
-/// The share of cells whose rise the frame's rise covers: the others (the steepest) get no VO.
-pub const RISE_QUANTILE: f64 = 0.9;
 /// Least step between ground levels, metres.
 pub const GROUND_STEP_M: f64 = 0.25;
 
@@ -36,11 +32,10 @@ pub const GROUND_STEP_M: f64 = 0.25;
 pub struct GroundTable {
     pub ground_z0: f64,
     pub ground_step: f64,
-    /// Added to the eyes' top height above the ground in the frame, metres.
-    pub rise: f64,
-    /// Per cell: its ground level, and whether a camera anywhere on its ground stands within
-    /// the frame's eye range (else the cell stores no VO).
+    /// Per cell: its ground level, its rise (ground steps from its level to its highest
+    /// ground), and whether it may store VOs (else it stores none).
     pub levels: Vec<u8>,
+    pub rises: Vec<u8>,
     pub fits: Vec<bool>,
     /// Per cell, the least and greatest terrain height (NaN where no triangle meets the cell).
     pub range: Vec<(f64, f64)>,
@@ -77,8 +72,8 @@ impl GroundTable {
             return Some(GroundTable {
                 ground_z0: 0.0,
                 ground_step: 0.0,
-                rise: 0.0,
                 levels: vec![0; n],
+                rises: vec![0; n],
                 fits: vec![false; n],
                 range,
             });
@@ -90,38 +85,39 @@ impl GroundTable {
             .iter()
             .map(|&(a, _)| if a.is_finite() { level(a) } else { 0 })
             .collect();
+        // Rounded up to whole steps; a top eye past level 255 is not stored.
         let rises: Vec<f64> = range
             .iter()
             .zip(&levels)
-            .map(|(&(_, b), &l)| b - (z0 + l as f64 * step))
+            .map(|(&(_, b), &l)| ((b - (z0 + l as f64 * step)) / step).ceil().max(0.0))
             .collect();
-        let mut sorted: Vec<f64> = rises.iter().copied().filter(|r| r.is_finite()).collect();
-        sorted.sort_by(f64::total_cmp);
-        let quantile = std::env::var("VOCC_RISE_Q")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(RISE_QUANTILE);
-        let q = sorted[((sorted.len() - 1) as f64 * quantile).round() as usize];
         if std::env::var_os("VOCC_DEBUG_RISE").is_some() {
-            let pick = |p: f64| sorted[((sorted.len() - 1) as f64 * p).round() as usize];
+            let mut sorted: Vec<f64> = rises.iter().copied().filter(|r| r.is_finite()).collect();
+            sorted.sort_by(f64::total_cmp);
+            let pick = |p: f64| step * sorted[((sorted.len() - 1) as f64 * p).round() as usize];
             eprintln!(
-                "rises: p10 {:.2} p25 {:.2} p50 {:.2} p75 {:.2} p90 {:.2} max {:.2}",
+                "rises (m): p10 {:.2} p50 {:.2} p90 {:.2} max {:.2}",
                 pick(0.1),
-                pick(0.25),
                 pick(0.5),
-                pick(0.75),
                 pick(0.9),
                 pick(1.0)
             );
         }
-        // On the step grid, so that the frame's eye height reads back exactly.
-        let rise = (q / GROUND_STEP_M).ceil() * GROUND_STEP_M;
-        let fits = rises.iter().map(|&r| r.is_finite() && r <= rise).collect();
+        let fits: Vec<bool> = rises
+            .iter()
+            .zip(&levels)
+            .map(|(&r, &l)| r.is_finite() && l as f64 + r <= 255.0)
+            .collect();
+        let rises = rises
+            .iter()
+            .zip(&fits)
+            .map(|(&r, &ok)| if ok { r as u8 } else { 0 })
+            .collect();
         Some(GroundTable {
             ground_z0: z0,
             ground_step: step,
-            rise,
             levels,
+            rises,
             fits,
             range,
         })

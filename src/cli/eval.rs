@@ -42,10 +42,6 @@ pub struct TruthArgs {
     /// Random seed (cells and rays).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// On a scene with a terrain: the eye heights above the terrain the store was baked for
-    /// (bake's --eye); eye points stand on the terrain at these heights, over the whole cell.
-    #[arg(long, default_value = "1.5..2.0", value_name = "LOW..HIGH", value_parser = crate::args::parse_range)]
-    pub eye: (f64, f64),
 }
 
 impl TruthArgs {
@@ -55,7 +51,7 @@ impl TruthArgs {
             samples_per_object: self.samples,
             radius: None,
             seed: self.seed,
-            eye_above: Some(self.eye),
+            eye_above: None,
         }
     }
 }
@@ -147,7 +143,7 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
         .collect();
     progress.finish();
     // The 3D check of the stored VOs: 16 eye points x 16 points per VO.
-    let rays = vo_rays_all(&caster, &store, &ids, 16, 16, a.truth.seed, truth.eye_above);
+    let rays = vo_rays_all(&caster, &store, &ids, 16, 16, a.truth.seed);
     let cells = eval_cells(&s, &store, &tree, &ids, &vs);
     let sum = summarize(&s, &cells);
     let mut out = std::io::stdout().lock();

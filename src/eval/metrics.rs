@@ -103,9 +103,8 @@ pub fn sample_cells(store: &Store, n: Option<usize>, seed: u64) -> Vec<CellId> {
 fn truncated(rec: &CellRecord, k: usize) -> CellRecord {
     match rec {
         CellRecord::Skipped => CellRecord::Skipped,
-        CellRecord::Vos { ground, vos } => {
-            CellRecord::new(*ground, &vos[..k.min(vos.len())]).unwrap_or(CellRecord::EMPTY)
-        }
+        CellRecord::Vos { ground, rise, vos } => CellRecord::new(*ground, &vos[..k.min(vos.len())])
+            .map_or(CellRecord::EMPTY, |r| r.with_rise(*rise)),
     }
 }
 
@@ -120,9 +119,14 @@ pub fn cell_vs(
     let f = store.frame();
     let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
     let rect = f.grid.cell_rect(id).unwrap_or([0.0; 4]);
-    let view = f.cell_view(id, rec.ground());
+    let view = f.cell_view(id, rec.stand());
     let (e0, e1) = view.map(|v| (v.e0, v.e1)).unwrap_or((0.0, 0.0));
-    visible_set(caster, scene, rect, (e0, e1), truth)
+    // On a terrain, eyes stand on it at the frame's eye heights over the whole cell.
+    let truth = TruthParams {
+        eye_above: Some((f.eye_lo, f.eye_hi)),
+        ..truth.clone()
+    };
+    visible_set(caster, scene, rect, (e0, e1), &truth)
 }
 
 /// Evaluates one cell against its visible set `vs` (ascending).
@@ -210,14 +214,15 @@ pub fn vo_rays(
     eyes: usize,
     points: usize,
     seed: u64,
-    eye_above: Option<(f64, f64)>,
 ) -> VoRays {
     use glam::DVec3;
     let f = store.frame();
     let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
-    let (Some(r), Some(view)) = (f.grid.cell_rect(id), f.cell_view(id, rec.ground())) else {
+    let (Some(r), Some(view)) = (f.grid.cell_rect(id), f.cell_view(id, rec.stand())) else {
         return VoRays::default();
     };
+    // On a terrain, eyes stand on it at the frame's eye heights (a camera on the ground).
+    let eye_above = Some((f.eye_lo, f.eye_hi));
     let mut state = seed ^ (id as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
     let mut u = move || {
         state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
@@ -228,7 +233,7 @@ pub fn vo_rays(
     };
     let mut out = VoRays::default();
     for q in rec.vos() {
-        let Some(g) = f.dequantize(id, rec.ground(), q) else {
+        let Some(g) = f.dequantize(id, rec.stand(), q) else {
             continue;
         };
         for _ in 0..eyes {
@@ -270,11 +275,10 @@ pub fn vo_rays_all(
     eyes: usize,
     points: usize,
     seed: u64,
-    eye_above: Option<(f64, f64)>,
 ) -> VoRays {
     use rayon::prelude::*;
     ids.par_iter()
-        .map(|&id| vo_rays(caster, store, id, eyes, points, seed, eye_above))
+        .map(|&id| vo_rays(caster, store, id, eyes, points, seed))
         .reduce(VoRays::default, |a, b| VoRays {
             rays: a.rays + b.rays,
             reached: a.reached + b.reached,

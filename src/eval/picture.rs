@@ -143,7 +143,7 @@ pub fn cell_picture(
         p(r[0], r[3])
     );
     for (i, q) in rec.vos().iter().enumerate() {
-        if let Some(g) = f.dequantize(id, rec.ground(), q) {
+        if let Some(g) = f.dequantize(id, rec.stand(), q) {
             let (a, b) = (p(g.a[0], g.a[1]), p(g.b[0], g.b[1]));
             let (a, b) = (
                 a.split_once(',').unwrap_or(("0", "0")),

@@ -222,7 +222,7 @@ pub fn dataset_section(
     let ev = eval_cells(&s, &store, &tree, &all, &vs_all);
     let sm = summarize(&s, &ev);
     let (med, p95) = bake_ms(&main.cells);
-    let rays = vo_rays_all(&caster, &store, &all, 16, 16, p.seed, p.truth.eye_above);
+    let rays = vo_rays_all(&caster, &store, &all, 16, 16, p.seed);
     let nbytes = main.bytes.len() as f64 / store.cell_count().max(1) as f64;
 
     let _ = writeln!(md, "### Default bake, 100 m cells, every cell\n");
@@ -292,7 +292,7 @@ pub fn dataset_section(
     for &id in sample_cells(&store, Some(3), p.seed + 1).iter() {
         let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
         let rect = store.frame().grid.cell_rect(id).unwrap_or([0.0; 4]);
-        let v = store.frame().cell_view(id, rec.ground()).expect("in grid");
+        let v = store.frame().cell_view(id, rec.stand()).expect("in grid");
         let pts =
             super::truth::convergence(&caster, &s, rect, (v.e0, v.e1), &p.truth, &eyes, &samples);
         let cells: Vec<String> = pts.iter().map(|c| c.vs.to_string()).collect();
@@ -316,7 +316,7 @@ pub fn dataset_section(
             .par_iter()
             .zip(&vs_sample)
             .map(|(&id, vs)| {
-                let ground = |st: &Store| st.cell(id).map(|r| r.ground()).ok();
+                let ground = |st: &Store| st.cell(id).map(|r| r.stand()).ok();
                 if ground(st) == ground(&store) {
                     vs.clone()
                 } else {
@@ -492,10 +492,10 @@ pub fn dataset_section(
         .map(|(&id, vs)| {
             let f = store.frame();
             let r = f.grid.cell_rect(id).expect("in grid");
-            let ground = store.cell(id).map_or(0, |c| c.ground());
+            let ground = store.cell(id).map_or(Default::default(), |c| c.stand());
             let view = f.cell_view(id, ground).expect("in grid");
             let h = Heights {
-                g: f.ground_z(ground),
+                g: f.ground_z(ground.level),
                 e0: view.e0,
                 e1: view.e1,
             };
@@ -526,7 +526,7 @@ pub fn dataset_section(
                 .binary_search_by_key(&id, |c| c.id)
                 .expect("baked")];
             let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
-            let view = f.cell_view(id, rec.ground()).expect("in grid");
+            let view = f.cell_view(id, rec.stand()).expect("in grid");
             let pvs = pvs_from_geoms(&view, &c.stats.unquantized, &boxes);
             compare(&s, id, c.stats.unquantized.len(), vs, &pvs)
         })
@@ -606,7 +606,7 @@ pub fn dataset_section(
             if size == 100.0 {
                 rays
             } else {
-                vo_rays_all(&caster, &st, &ids, 16, 16, p.seed, p.truth.eye_above)
+                vo_rays_all(&caster, &st, &ids, 16, 16, p.seed)
             },
         ));
         let ms = bake_ms(&v.cells).0;

@@ -778,9 +778,10 @@ pub fn pvs_with_stats(
         st.visible = out.len();
         st
     };
+    // Where the cell stands: its ground level and, in 2.1, its rise (the top eye).
     let (ground, vos) = match rec {
         CellRecord::Skipped => return all(out, st),
-        CellRecord::Vos { ground, vos } => (*ground, vos.as_slice()),
+        CellRecord::Vos { vos, .. } => (rec.stand(), vos.as_slice()),
     };
     let Some(view) = frame.cell_view(id, ground) else {
         return all(out, st);

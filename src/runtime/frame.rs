@@ -210,6 +210,21 @@ impl QVo {
     }
 }
 
+/// Where a cell stands: its ground level and rise (`CellRecord::Vos`), what
+/// [`crate::runtime::Frame::cell_view`] and [`crate::runtime::Frame::dequantize`] need. A bare
+/// level converts to it with rise 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct CellGround {
+    pub level: u8,
+    pub rise: u8,
+}
+
+impl From<u8> for CellGround {
+    fn from(level: u8) -> CellGround {
+        CellGround { level, rise: 0 }
+    }
+}
+
 /// A VO in the local frame: segment `a`–`b`, standing from `g` to `h`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VoGeom {
@@ -247,15 +262,22 @@ impl Frame {
         ])
     }
 
-    /// The view of a cell standing on ground level `ground`.
-    pub fn cell_view(&self, id: CellId, ground: u8) -> Option<CellView> {
+    /// The view of a cell standing on `ground` (a level, or a level and a rise): its eyes
+    /// from `g + eye_lo` to `g + rise * ground_step + eye_hi`, `g` the level's height.
+    pub fn cell_view(&self, id: CellId, ground: impl Into<CellGround>) -> Option<CellView> {
+        let s = ground.into();
         let rect = self.grid.cell_rect(id)?;
-        let g = self.ground_z(ground);
+        let g = self.ground_z(s.level);
         Some(CellView {
             rect,
             e0: g + self.eye_lo,
-            e1: g + self.eye_hi,
+            e1: self.top_eye(s),
         })
+    }
+
+    /// The top eye of a cell standing on `s`: `ground_z(level) + rise * ground_step + eye_hi`.
+    pub fn top_eye(&self, s: CellGround) -> f64 {
+        self.ground_z(s.level) + s.rise as f64 * self.ground_step + self.eye_hi
     }
 
     /// VO top of level `level` for a cell whose top eye is at `e1`.
@@ -263,17 +285,18 @@ impl Frame {
         e1 + self.h0 * (pow_u8(self.h_ratio, level) - 1.0)
     }
 
-    /// The geometry of a stored VO of cell `id` standing on ground level `ground`: from the
-    /// cell's ground, or from `ground_z0` for a deep VO (format 2.1), to the top of its level
-    /// above the cell's top eye.
-    pub fn dequantize(&self, id: CellId, ground: u8, q: &QVo) -> Option<VoGeom> {
+    /// The geometry of a stored VO of cell `id` standing on `ground` (a level, or a level and a
+    /// rise): from the cell's ground, or from `ground_z0` for a deep VO (format 2.1), to the top
+    /// of its level above the cell's top eye.
+    pub fn dequantize(&self, id: CellId, ground: impl Into<CellGround>, q: &QVo) -> Option<VoGeom> {
+        let s = ground.into();
         let c = self.cell_centre(id)?;
-        let g = self.ground_z(ground);
+        let g = self.ground_z(s.level);
         Some(VoGeom {
             a: add(c, q.a.offset(self.quantum)),
             b: add(c, q.b.offset(self.quantum)),
             g: if q.deep { self.ground_z0 } else { g },
-            h: self.vo_top(g + self.eye_hi, q.level),
+            h: self.vo_top(self.top_eye(s), q.level),
         })
     }
 }

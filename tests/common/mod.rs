@@ -140,9 +140,9 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
             DVec2::new(r[2], r[3]),
             DVec2::new(r[0], r[3]),
         ];
-        let view = f.cell_view(id, rec.ground()).unwrap();
+        let view = f.cell_view(id, rec.stand()).unwrap();
         for q in rec.vos() {
-            let vo = f.dequantize(id, rec.ground(), q).unwrap();
+            let vo = f.dequantize(id, rec.stand(), q).unwrap();
             let (a, b) = (DVec2::from(vo.a), DVec2::from(vo.b));
             assert!(vo.h >= view.e1 && vo.g <= view.e0);
             // Rule 2, with the brief's bound and lambda <= 1 (ARCHITECTURE.md).

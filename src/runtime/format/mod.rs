@@ -38,7 +38,7 @@ pub mod store;
 
 pub use blob::{decode_blob, encode_blob};
 pub use frame::{decode_frame, encode_frame, validate_frame};
-pub use records::{CellRecord, VoList};
+pub use records::{CellGround, CellRecord, VoList};
 pub use store::{encode_store, encode_store_with, SceneSection, Store};
 
 /// Length of an encoded [`Frame`].
@@ -186,6 +186,14 @@ pub enum FormatError {
     GroundNotStored { cell: CellId, ground: u8 },
     #[error("payload of {len} bytes does not fit the u32 payload_len")]
     PayloadTooLarge { len: u64 },
+    /// 2.1: a cell's rise byte (at `offset`) is 0, or puts its top eye above ground level 255.
+    #[error("cell {cell}'s rise {rise} at offset {offset} is 0 or takes its ground level {ground} past 255")]
+    BadRise {
+        cell: CellId,
+        ground: u8,
+        rise: u8,
+        offset: u64,
+    },
 }
 
 // ---------------------------------------------------------------------------------------------
