@@ -376,6 +376,25 @@ mod scene_targets {
     /// World origin the walkable target subtracts (Lyon's, as the seeds are from Lyon).
     pub const WALKABLE_ORIGIN: DVec3 = DVec3::new(1_842_000.0, 5_175_000.0, 0.0);
 
+    /// Fuzz target `dem`: a GeoTIFF DEM (`scene/dem.rs`), all of it kept, then the terrain and
+    /// its blockers built from it (a small image's). Checks: every triangle finite, every
+    /// terrain blocker a square standing from the floor to a top above it.
+    pub fn dem(data: &[u8]) -> Result<usize, LoadError> {
+        let d = crate::scene::dem::read_dem(Path::new("fuzz.tif"), data, None)?;
+        assert!(d.triangles.iter().flatten().all(|p| p.is_finite()));
+        let n = d.triangles.len();
+        if n > 0 && n <= 20_000 {
+            let o = d.triangles[0][0];
+            let local = d.triangles.iter().map(|t| t.map(|p| p - o)).collect();
+            if let Some(t) = crate::scene::Terrain::new(Vec::new(), local) {
+                for b in &t.blockers {
+                    assert!(b.polygon.len() == 4 && b.top > b.base && b.base == t.floor);
+                }
+            }
+        }
+        Ok(n)
+    }
+
     /// Fuzz target `walkable`: the `--cells` reader, then cell selection over a 4 x 4 grid laid
     /// on the area's extent. Returns the number of rings.
     pub fn walkable(data: &[u8]) -> Result<usize, LoadError> {

@@ -211,6 +211,7 @@ fn helsinki_pbf_reads_heights_from_its_tags_and_evaluates_with_no_false_culls() 
         samples_per_object: 1,
         radius: None,
         seed: 3,
+        eye_above: None,
     };
     for &id in &ids {
         let r = vo_rays(&caster, &store, id, 8, 8, 3);

@@ -24,7 +24,7 @@ use super::error::check_coord;
 use super::{LoadError, LoadErrorKind, Location};
 
 /// The most pixels a DEM may have.
-pub const MAX_PIXELS: u64 = 100_000_000;
+pub const MAX_PIXELS: u64 = 32_000_000;
 const FORMAT: &str = "GeoTIFF";
 
 /// A DEM read: its triangles in the window, and what it is.
@@ -69,7 +69,7 @@ pub fn read_dem(
     let tiff_err =
         |what: &str, e: tiff::TiffError| malformed(path, Location::File, format!("{what}: {e}"));
     let mut limits = Limits::default();
-    limits.decoding_buffer_size = 1 << 30;
+    limits.decoding_buffer_size = 1 << 28;
     limits.ifd_value_size = 1 << 20;
     let mut d = Decoder::new(Cursor::new(bytes))
         .map_err(|e| tiff_err("not a TIFF file", e))?

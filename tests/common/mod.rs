@@ -154,8 +154,10 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
             // Rule 2 for a VO at least `dn` from the cell (`dn <= d_near` only raises the
             // bound, so these blockers support the VO too).
             let used_for = |dn: f64, beside: bool| -> Vec<Vec<DVec2>> {
+                // The objects' blockers and the terrain's (solid ground).
                 s.blockers
                     .iter()
+                    .chain(s.terrain_blockers())
                     .filter(|bl| {
                         let (bl_lo, bl_hi) = bl
                             .polygon
