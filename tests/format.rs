@@ -904,7 +904,13 @@ fn s9_checksum_mismatch() {
 #[test]
 fn s10_reserved_index_values() {
     for d in docs() {
-        for value in [11u8, 12, 0x80, 254] {
+        // 11..=20 announce a rise byte in 2.1 (section 13): reserved in 1.0 only.
+        let values: &[u8] = if d.major == 1 {
+            &[11, 12, 20, 21, 0x80, 254]
+        } else {
+            &[21, 0x80, 254]
+        };
+        for &value in values {
             let mut s = d.bytes.clone();
             s[d.index + 1] = value; // cell 1
             fix_store_crc(&mut s);
@@ -1331,16 +1337,25 @@ fn b1_to_b3_short_magic_major() {
 #[test]
 fn b4_reserved_count() {
     let f = doc_frame();
-    for (_, mut b, _, _) in doc_blobs() {
-        b[9] = 11;
-        assert_eq!(
-            decode_blob(&f, &b).unwrap_err(),
-            FormatError::BadIndexByte {
-                cell: 0,
-                value: 11,
-                offset: 9
-            }
-        );
+    for (major, b, _, _) in doc_blobs() {
+        // 11..=20 announce a rise byte in 2.1 (section 13): reserved in 1.0 only.
+        let values: &[u8] = if major == 1 {
+            &[11, 20, 21]
+        } else {
+            &[21, 254]
+        };
+        for &value in values {
+            let mut b = b.clone();
+            b[9] = value;
+            assert_eq!(
+                decode_blob(&f, &b).unwrap_err(),
+                FormatError::BadIndexByte {
+                    cell: 0,
+                    value,
+                    offset: 9
+                }
+            );
+        }
     }
 }
 

@@ -61,10 +61,13 @@ pub fn cell_picture(
             .map(|v| v.clamp(0.0, 255.0) as u8);
             let _ = write!(
                 s,
-                r##"<polygon points="{} {} {}" fill="#{:02x}{:02x}{:02x}" stroke="none"/>"##,
+                r##"<polygon points="{} {} {}" fill="#{:02x}{:02x}{:02x}" stroke="#{:02x}{:02x}{:02x}" stroke-width="0.8"/>"##,
                 p(tri[0].x, tri[0].y),
                 p(tri[1].x, tri[1].y),
                 p(tri[2].x, tri[2].y),
+                rgb[0],
+                rgb[1],
+                rgb[2],
                 rgb[0],
                 rgb[1],
                 rgb[2]
