@@ -91,18 +91,6 @@ impl GroundTable {
             .zip(&levels)
             .map(|(&(_, b), &l)| ((b - (z0 + l as f64 * step)) / step).ceil().max(0.0))
             .collect();
-        if std::env::var_os("VOCC_DEBUG_RISE").is_some() {
-            let mut sorted: Vec<f64> = rises.iter().copied().filter(|r| r.is_finite()).collect();
-            sorted.sort_by(f64::total_cmp);
-            let pick = |p: f64| step * sorted[((sorted.len() - 1) as f64 * p).round() as usize];
-            eprintln!(
-                "rises (m): p10 {:.2} p50 {:.2} p90 {:.2} max {:.2}",
-                pick(0.1),
-                pick(0.5),
-                pick(0.9),
-                pick(1.0)
-            );
-        }
         let fits: Vec<bool> = rises
             .iter()
             .zip(&levels)

@@ -11,7 +11,8 @@
 //! - the VO top of level `k` (`0..32`; format 1: `0..16`) is `e1 + h0 * (h_ratio^k - 1)`, computed by one function
 //!   ([`Frame::vo_top`]) that the bake also uses: the bake checks what the runtime will read;
 //! - the VO bottom is the cell's ground `g` (or, for a deep VO of format 2.1, `ground_z0`), and
-//!   the eyes stand at `g + eye_lo ..= g + eye_hi`.
+//!   the eyes stand at `g + eye_lo ..= g + rise * ground_step + eye_hi` (the rise of format 2.1;
+//!   0 in 2.0).
 
 use crate::runtime::grid::{CellId, GridDescriptor};
 
