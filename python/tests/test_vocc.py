@@ -137,7 +137,7 @@ def test_the_store_records_its_version_and_scene(baked):
     assert store.version == (2, 0)
     assert store.objects == want["objects"] == 2576
     assert store.scene == int(want["scene"], 16) != 0
-    assert store.crs == want["crs"] == ""
+    assert store.crs == want["crs"] == "EPSG:3946"
 
 
 def doc_hex(name):

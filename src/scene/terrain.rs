@@ -438,6 +438,13 @@ impl Terrain {
         if !(lo.x <= hi.x && lo.y <= hi.y) {
             return false;
         }
+        // A rectangle of no width (a wall's box) is tested grown by a millimetre, a larger
+        // rectangle, so that the exact tests below see a proper convex polygon.
+        let (lo, hi) = if lo.x < hi.x && lo.y < hi.y {
+            (lo, hi)
+        } else {
+            (lo - DVec2::splat(0.001), hi + DVec2::splat(0.001))
+        };
         let rect = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
         let mut ids = Vec::new();
         self.boundary_index.query(lo, hi, &mut ids);
@@ -644,6 +651,9 @@ mod tests {
         assert!(!t.covers(DVec2::new(31.0, 31.0), DVec2::new(39.0, 39.0)));
         assert!(!t.covers(DVec2::new(70.0, 70.0), DVec2::new(81.0, 75.0)));
         assert!(t.covers(DVec2::new(40.5, 0.5), DVec2::new(79.5, 79.5)));
+        // A wall's box, of no width: covered away from the hole, not across it.
+        assert!(t.covers(DVec2::new(45.0, 5.0), DVec2::new(45.0, 60.0)));
+        assert!(!t.covers(DVec2::new(35.0, 5.0), DVec2::new(35.0, 60.0)));
         // A flat terrain merges into few squares.
         assert!(t.blockers.len() < 30, "{}", t.blockers.len());
     }
