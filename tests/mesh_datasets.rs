@@ -123,7 +123,10 @@ fn denhaag_cityjson_0_8() {
     assert_eq!(f.format, "CityJSON");
     // Its TINRelief is read as the terrain (scene/terrain.rs).
     assert_eq!(f.other_types.get("TINRelief (read as terrain)"), Some(&1));
-    assert_eq!(scene.terrain.as_ref().map(|t| t.triangles.len()), Some(5595));
+    assert_eq!(
+        scene.terrain.as_ref().map(|t| t.triangles.len()),
+        Some(5595)
+    );
     // 844 buildings + 1,653 parts; 507 buildings carry their geometry in their parts.
     assert_eq!(
         f.other_types.get("Building (geometry in parts)"),
