@@ -65,6 +65,7 @@ impl CellSetup {
     /// The setup of cell `id`, or (as `Err`) its record when no generator has anything to do:
     /// empty when it has no eyes or no blocker that may support a VO, skipped when it lies
     /// wholly inside one blocker that stands above the eyes.
+    #[allow(clippy::result_large_err)]
     pub(super) fn new(plan: &Plan, id: CellId) -> Result<CellSetup, CellRecord> {
         Self::new_with(plan, id, false)
     }
@@ -72,6 +73,7 @@ impl CellSetup {
     /// [`CellSetup::new`], with the VOs' bottom at the frame's lowest ground level when `deep`
     /// (format 2.1's deep VOs, bake/terrain.rs): rule 2 then takes that bottom, so only
     /// blockers reaching that low support them, and rule 3 hides what lies below the cell.
+    #[allow(clippy::result_large_err)]
     pub(super) fn new_with(plan: &Plan, id: CellId, deep: bool) -> Result<CellSetup, CellRecord> {
         let f = &plan.frame;
         let cell = plan.cell_polygon(id);

@@ -168,10 +168,8 @@ impl Ground {
         // Clip to the grid's box.
         let hi = self.lo + DVec2::new(self.nx as f64, self.ny as f64) * self.cs;
         for k in 0..2 {
-            if d2[k] == 0.0 {
-                if o2[k] < self.lo[k] || o2[k] > hi[k] {
-                    return None;
-                }
+            if d2[k] == 0.0 && (o2[k] < self.lo[k] || o2[k] > hi[k]) {
+                return None;
             }
         }
         let (mut t0, mut t1) = (t, end);

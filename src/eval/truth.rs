@@ -104,6 +104,7 @@ fn targets(scene: &Scene, cell: [f64; 4], radius: Option<f64>) -> Vec<u32> {
 /// The first object each ray hits from one eye of the cell, over `samples` samples per target.
 /// The eye stands at `first` (fractions of the cell's sides), or, if that is inside an object, at
 /// a point drawn from `eye_seed`. Returns the sorted, deduplicated hits and the number of rays.
+#[allow(clippy::too_many_arguments)]
 fn eye_hits(
     caster: &Caster,
     cell: [f64; 4],

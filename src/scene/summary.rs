@@ -11,12 +11,16 @@ use serde::Serialize;
 
 use super::{Location, Scene, Shape};
 
+/// One terrain source: path, format, triangles kept, DEM pixel size (m), DEM pixels with no
+/// data near the scene.
+pub type TerrainSourceRow = (String, String, usize, Option<(f64, f64)>, usize);
+
 /// What `vocc info` says of a terrain.
 #[derive(Clone, Debug, Serialize)]
 pub struct TerrainSummary {
     /// Per source: path, format, triangles kept, DEM pixel size (m), DEM pixels with no data
     /// near the scene.
-    pub sources: Vec<(String, String, usize, Option<(f64, f64)>, usize)>,
+    pub sources: Vec<TerrainSourceRow>,
     pub triangles: usize,
     /// Local extent of the terrain kept (within `TERRAIN_MARGIN_M` of the objects).
     pub extent_min: [f64; 2],

@@ -341,7 +341,9 @@ impl Terrain {
         }
         // Boundary candidates: every edge not shared by exactly two triangles on opposite sides.
         let key = |p: DVec2| (p.x.to_bits(), p.y.to_bits());
-        let mut edges: HashMap<((u64, u64), (u64, u64)), Vec<(usize, usize)>> = HashMap::new();
+        // Edge (its ends' xy bits, ordered) -> (triangle, edge index) of its uses.
+        type EdgeKey = ((u64, u64), (u64, u64));
+        let mut edges: HashMap<EdgeKey, Vec<(usize, usize)>> = HashMap::new();
         for (ti, t) in tris.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (key(t[k].truncate()), key(t[(k + 1) % 3].truncate()));
