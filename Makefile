@@ -80,6 +80,13 @@ pictures:
 		-o target/lyon_growth.vocc
 	$(CARGO) run --locked --release -- render target/lyon.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
 		--at 1842000,5176050 --radius 400 -o docs/img/lyon_cell_store.svg
+	$(CARGO) run --locked --release -- bake data/capetown/salt_river_footprints_utm34s.geojson \
+		--height-attr height --base-attr base_z --terrain data/capetown/capetown_dem25m_utm34s.tif \
+		-o target/saltriver.vocc
+	$(CARGO) run --locked --release -- render target/saltriver.vocc \
+		data/capetown/salt_river_footprints_utm34s.geojson --height-attr height --base-attr base_z \
+		--terrain data/capetown/capetown_dem25m_utm34s.tif --cell 221 --radius 700 \
+		-o docs/img/saltriver_cell_terrain.svg
 	for at in 1842000,5176050 1841450,5175850; do \
 		$(CARGO) run --locked --release -- render target/lyon_growth.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
 			--at $$at --radius 700 -o docs/img/lyon_before_$$at.svg; \

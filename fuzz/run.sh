@@ -11,7 +11,7 @@ set -u
 cd "$(dirname "$0")"
 secs=${1:-600}
 [ $# -gt 0 ] && shift
-targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq}
+targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq dem}
 cargo +nightly fuzz build || exit 2
 bin=target/$(rustc +nightly -vV | sed -n 's/^host: //p')/release
 mkdir -p logs
@@ -25,7 +25,7 @@ for t in $targets; do
     [ -d "seeds/$t" ] && seeds="seeds/$t"
     # -timeout: an input that takes 10 s is a finding; -max_len: room for larger scenes than the
     # largest seed (libFuzzer's default); the store and blob targets keep the default.
-    case $t in gpkg) len="-max_len=65536" ;; geojson | cityjson | obj | walkable | osm | fgb | shp | citygml | cityjsonseq) len="-max_len=16384" ;; *) len="" ;; esac
+    case $t in gpkg) len="-max_len=65536" ;; geojson | cityjson | obj | walkable | osm | fgb | shp | citygml | cityjsonseq | dem) len="-max_len=16384" ;; *) len="" ;; esac
     echo "== $t: $secs s"
     # shellcheck disable=SC2086
     "$bin/$t" "corpus/$t" $seeds -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \

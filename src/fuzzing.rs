@@ -212,7 +212,7 @@ fn push_v1_record(out: &mut Vec<u8>, f: &Frame, rec: &CellRecord) {
 /// Runs the culler on cell `id` over boxes around it: the ids come out ascending and in range,
 /// and a box that contains the cell (it holds the eyes) is never culled.
 fn check_culler(f: &Frame, id: CellId, rec: &CellRecord) {
-    let Some(view) = f.cell_view(id, rec.ground()) else {
+    let Some(view) = f.cell_view(id, rec.stand()) else {
         panic!("cell {id} of an accepted frame has no view");
     };
     let [x0, y0, x1, y1] = view.rect;
@@ -375,6 +375,25 @@ mod scene_targets {
 
     /// World origin the walkable target subtracts (Lyon's, as the seeds are from Lyon).
     pub const WALKABLE_ORIGIN: DVec3 = DVec3::new(1_842_000.0, 5_175_000.0, 0.0);
+
+    /// Fuzz target `dem`: a GeoTIFF DEM (`scene/dem.rs`), all of it kept, then the terrain and
+    /// its blockers built from it (a small image's). Checks: every triangle finite, every
+    /// terrain blocker a square standing from the floor to a top above it.
+    pub fn dem(data: &[u8]) -> Result<usize, LoadError> {
+        let d = crate::scene::dem::read_dem(Path::new("fuzz.tif"), data, None)?;
+        assert!(d.triangles.iter().flatten().all(|p| p.is_finite()));
+        let n = d.triangles.len();
+        if n > 0 && n <= 20_000 {
+            let o = d.triangles[0][0];
+            let local = d.triangles.iter().map(|t| t.map(|p| p - o)).collect();
+            if let Some(t) = crate::scene::Terrain::new(Vec::new(), local) {
+                for b in &t.blockers {
+                    assert!(b.polygon.len() == 4 && b.top > b.base && b.base == t.floor);
+                }
+            }
+        }
+        Ok(n)
+    }
 
     /// Fuzz target `walkable`: the `--walkable` reader, then cell selection over a 4 x 4 grid laid
     /// on the area's extent. Returns the number of rings.

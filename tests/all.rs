@@ -19,6 +19,7 @@ mod incremental;
 mod mesh_datasets;
 mod readers;
 mod stability;
+mod terrain;
 mod truth;
 mod umbra_cases;
 mod verifier;

@@ -29,6 +29,7 @@ fn no_false_culls_on_a_seeded_sample_of_lyon_cells() {
         samples_per_object: 1,
         radius: None,
         seed: 7,
+        eye_above: None,
     };
     let mut culled = 0;
     let mut vos = 0;

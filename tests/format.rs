@@ -116,6 +116,7 @@ fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
         a: QPoint::fine(x1, y1),
         b: QPoint::fine(x2, y2),
         level,
+        deep: false,
     }
 }
 
@@ -130,11 +131,13 @@ fn doc_cells() -> Vec<CellRecord> {
         a: p(3, 194, 406),
         b: p(3, 344, 406),
         level: 20,
+        deep: false,
     };
     let north = QVo {
         a: p(0, 376, 346),
         b: p(2, 286, 456),
         level: 16,
+        deep: false,
     };
     vec![
         CellRecord::new(4, &[q(196, 376, 336, 376, 5), far, north]).unwrap(),
@@ -166,7 +169,7 @@ fn doc_cells_v1() -> Vec<CellRecord> {
 // the tests build 1.0 stores and blobs with it, and the document's 1.0 examples pin it.
 
 fn v1_record(out: &mut Vec<u8>, f: &Frame, rec: &CellRecord) {
-    if let CellRecord::Vos { ground, vos } = rec {
+    if let CellRecord::Vos { ground, vos, .. } = rec {
         if !vos.is_empty() {
             if f.per_cell_ground() {
                 out.push(*ground);
@@ -901,7 +904,13 @@ fn s9_checksum_mismatch() {
 #[test]
 fn s10_reserved_index_values() {
     for d in docs() {
-        for value in [11u8, 12, 0x80, 254] {
+        // 11..=20 announce a rise byte in 2.1 (section 13): reserved in 1.0 only.
+        let values: &[u8] = if d.major == 1 {
+            &[11, 12, 20, 21, 0x80, 254]
+        } else {
+            &[21, 0x80, 254]
+        };
+        for &value in values {
             let mut s = d.bytes.clone();
             s[d.index + 1] = value; // cell 1
             fix_store_crc(&mut s);
@@ -1027,6 +1036,7 @@ fn s13_degenerate_vo() {
         a: p(5, 0, 511),
         b: p(5, 0, 511),
         level: 31,
+        deep: false,
     };
     assert_eq!(
         Store::parse(&with_vo(&docs()[0], 2, &far.to_bytes())).unwrap_err(),
@@ -1114,28 +1124,33 @@ fn s17_crs_not_utf8() {
 }
 
 #[test]
-fn s18_reserved_vo_bit() {
+fn s18_deep_vo_bit_is_read_in_2_1() {
+    // Bit 47 was reserved in 2.0; 2.1 reads it as the deep flag (FORMAT.md 3.1): the VO
+    // stands from ground_z0. The same bytes otherwise.
     let d = &docs()[0];
     let mut s = d.bytes.clone();
     s[d.vo(1) + 5] |= 0x80; // bit 47 of cell 0's VO 1
     fix_store_crc(&mut s);
-    assert_eq!(
-        Store::parse(&s).unwrap_err(),
-        FormatError::ReservedVoBit {
-            cell: 0,
-            vo: 1,
-            offset: 0xac
-        }
-    );
-    // Checked before the endpoints: an all-ones VO sets it and is neither canonical nor sane.
-    assert_eq!(
+    let st = Store::parse(&s).unwrap();
+    let rec = st.cell(0).unwrap();
+    assert!(rec.vos()[1].deep && !rec.vos()[0].deep && !rec.vos()[2].deep);
+    let g = st
+        .frame()
+        .dequantize(0, rec.stand(), &rec.vos()[1])
+        .unwrap();
+    assert_eq!(g.g, 160.0); // ground_z0, not the cell's 162
+    assert_eq!(g.h, 506.9446951953614);
+    // Re-encoded: the same records, minor 1.
+    let mut cells = doc_cells();
+    cells[0] = rec;
+    let again = encode_store_with(&doc_frame(), &cells, &doc_scene()).unwrap();
+    assert_eq!(&again[8..12], &[2, 0, 1, 0]);
+    assert_eq!(Store::parse(&again).unwrap().cell(0).unwrap(), rec);
+    // An all-ones VO is deep, canonical and degenerate (both ends (7, 511, 511)).
+    assert!(matches!(
         Store::parse(&with_vo(d, 0, &[0xff; 6])).unwrap_err(),
-        FormatError::ReservedVoBit {
-            cell: 0,
-            vo: 0,
-            offset: 0xa6
-        }
-    );
+        FormatError::DegenerateVo { .. }
+    ));
 }
 
 #[test]
@@ -1149,6 +1164,7 @@ fn s19_non_canonical_endpoint() {
         a,
         b: p(0, 336, 376),
         level: 5,
+        deep: false,
     };
     assert_eq!(
         Store::parse(&with_vo(d, 0, &bad.to_bytes())).unwrap_err(),
@@ -1164,6 +1180,7 @@ fn s19_non_canonical_endpoint() {
         a: p(3, 194, 406),
         b: p(4, 256 + 44, 256 + 75),
         level: 20,
+        deep: false,
     };
     assert_eq!(bad.b.canonical(), p(3, 344, 406));
     assert_eq!(
@@ -1180,6 +1197,7 @@ fn s19_non_canonical_endpoint() {
         a,
         b: p(0, 196, 376),
         level: 5,
+        deep: false,
     };
     assert_eq!(
         Store::parse(&with_vo(d, 2, &twice.to_bytes())).unwrap_err(),
@@ -1210,6 +1228,7 @@ fn s20_exponents_levels_and_scene_values_are_accepted() {
             a: p(e, 511, 0),
             b: p(7 - e, 0, 300 + e as u16),
             level: 24 + e,
+            deep: false,
         })
         .collect();
     assert!(vos.iter().all(|v| v.is_canonical() && !v.is_degenerate()));
@@ -1318,16 +1337,25 @@ fn b1_to_b3_short_magic_major() {
 #[test]
 fn b4_reserved_count() {
     let f = doc_frame();
-    for (_, mut b, _, _) in doc_blobs() {
-        b[9] = 11;
-        assert_eq!(
-            decode_blob(&f, &b).unwrap_err(),
-            FormatError::BadIndexByte {
-                cell: 0,
-                value: 11,
-                offset: 9
-            }
-        );
+    for (major, b, _, _) in doc_blobs() {
+        // 11..=20 announce a rise byte in 2.1 (section 13): reserved in 1.0 only.
+        let values: &[u8] = if major == 1 {
+            &[11, 20, 21]
+        } else {
+            &[21, 254]
+        };
+        for &value in values {
+            let mut b = b.clone();
+            b[9] = value;
+            assert_eq!(
+                decode_blob(&f, &b).unwrap_err(),
+                FormatError::BadIndexByte {
+                    cell: 0,
+                    value,
+                    offset: 9
+                }
+            );
+        }
     }
 }
 
@@ -1478,19 +1506,13 @@ fn b10_empty_and_skipped_blobs_are_14_bytes() {
 }
 
 #[test]
-fn b11_reserved_vo_bit() {
+fn b11_deep_vo_bit_is_read_in_2_1() {
     let f = doc_frame();
     let mut b = doc_hex("blob-cell0");
     b[0x17 + 5] |= 0x80; // bit 47 of VO 2
     fix_blob_crc(&mut b);
-    assert_eq!(
-        decode_blob(&f, &b).unwrap_err(),
-        FormatError::ReservedVoBit {
-            cell: 0,
-            vo: 2,
-            offset: 0x17
-        }
-    );
+    let (_, rec) = decode_blob(&f, &b).unwrap();
+    assert!(rec.vos()[2].deep);
 }
 
 #[test]
@@ -1502,6 +1524,7 @@ fn b12_non_canonical_endpoint() {
         a: p(0, 196, 376),
         b: p(1, 256 + 40, 256 + 60),
         level: 5,
+        deep: false,
     };
     assert_eq!(bad.b.canonical(), p(0, 336, 376));
     assert_eq!(
@@ -1755,7 +1778,12 @@ fn arb_point() -> impl Strategy<Value = QPoint> {
 /// A 2.0 VO: canonical endpoints of any exponent, levels 0..32.
 fn arb_qvo() -> impl Strategy<Value = QVo> {
     (arb_point(), arb_point(), 0u8..32)
-        .prop_map(|(a, b, level)| QVo { a, b, level })
+        .prop_map(|(a, b, level)| QVo {
+            a,
+            b,
+            level,
+            deep: false,
+        })
         .prop_filter("degenerate", |v| !v.is_degenerate())
 }
 
@@ -1776,6 +1804,7 @@ fn arb_record(
         4 => (any::<u8>(), prop::collection::vec(vo, 1..=10)).prop_map(move |(g, v)| {
             CellRecord::Vos {
                 ground: if per_cell_ground { g } else { 0 },
+                rise: 0,
                 vos: VoList::from_slice(&v).unwrap(),
             }
         }),
@@ -1892,7 +1921,9 @@ fn check_canonical(bytes: &[u8], s: &Store<'_>) -> Result<(), TestCaseError> {
         m => panic!("major {m} accepted"),
     };
     let mut expect = bytes.to_vec();
-    expect[10..12].fill(0);
+    // The encoder writes the lowest minor its records need: 1 with a deep VO (2.1), else 0.
+    let deep = recs.iter().any(|r| r.vos().iter().any(|q| q.deep));
+    expect[10..12].copy_from_slice(&[(deep && s.major() == 2) as u8, 0]);
     fix_store_crc(&mut expect);
     prop_assert_eq!(again, expect);
     match encode_store(s.frame(), &recs) {
@@ -2040,4 +2071,105 @@ proptest! {
             );
         }
     }
+}
+
+/// The records of FORMAT.md section 13 (2.1): cell 0 with a rise of 6 and a deep far wall.
+fn doc_cells_2_1() -> Vec<CellRecord> {
+    let far = QVo {
+        a: p(3, 194, 406),
+        b: p(3, 344, 406),
+        level: 20,
+        deep: true,
+    };
+    vec![
+        CellRecord::new(4, &[q(196, 376, 336, 376, 5), far])
+            .unwrap()
+            .with_rise(6),
+        CellRecord::Skipped,
+        CellRecord::EMPTY,
+    ]
+}
+
+#[test]
+fn doc_2_1_examples_are_the_encoder_output_and_read_back() {
+    let f = doc_frame();
+    let cells = doc_cells_2_1();
+    let bytes = encode_store_with(&f, &cells, &doc_scene()).unwrap();
+    assert_eq!(bytes, doc_hex("store-2.1"));
+    let st = Store::parse(&bytes).unwrap();
+    assert_eq!(st.version(), (2, 1));
+    assert_eq!(st.cell(0).unwrap(), cells[0]);
+    let blob = encode_blob(&f, 0, &cells[0]).unwrap();
+    assert_eq!(blob, doc_hex("blob-2.1-cell0"));
+    assert_eq!(decode_blob(&f, &blob).unwrap(), (0, cells[0]));
+    // Section 13's worked figures.
+    let rec = cells[0];
+    let view = f.cell_view(0, rec.stand()).unwrap();
+    assert_eq!((view.e0, view.e1), (163.5, 167.0));
+    let g0 = f.dequantize(0, rec.stand(), &rec.vos()[0]).unwrap();
+    assert_eq!((g0.g, g0.h), (162.0, 175.20703125));
+    let g1 = f.dequantize(0, rec.stand(), &rec.vos()[1]).unwrap();
+    assert_eq!((g1.g, g1.h), (160.0, 509.9446951953614));
+    // Without the rise and the deep VO, the same records write a 2.0 file.
+    let plain = encode_store_with(&f, &doc_cells(), &doc_scene()).unwrap();
+    assert_eq!(&plain[8..12], &[2, 0, 0, 0]);
+}
+
+#[test]
+fn s22_b14_bad_rise_and_rise_values_where_they_cannot_be() {
+    let f = doc_frame();
+    let good = doc_hex("store-2.1");
+    // Rise 0 (offset 0xa6), and ground 4 + rise 252 > 255.
+    for (rise, what) in [(0u8, "zero"), (252, "past 255")] {
+        let mut s = good.clone();
+        s[0xa6] = rise;
+        fix_store_crc(&mut s);
+        assert_eq!(
+            Store::parse(&s).unwrap_err(),
+            FormatError::BadRise {
+                cell: 0,
+                ground: 4,
+                rise,
+                offset: 0xa6
+            },
+            "{what}"
+        );
+    }
+    let mut b = doc_hex("blob-2.1-cell0");
+    b[0x0b] = 0;
+    fix_blob_crc(&mut b);
+    assert!(matches!(
+        decode_blob(&f, &b).unwrap_err(),
+        FormatError::BadRise { rise: 0, .. }
+    ));
+    // 11..=20 need ground bytes: a flat frame refuses them (S10, B4); 21 is reserved.
+    let flat = Frame {
+        ground_step: 0.0,
+        ..f
+    };
+    let mut b = doc_hex("blob-2.1-cell0");
+    fix_blob_crc(&mut b);
+    assert!(matches!(
+        decode_blob(&flat, &b).unwrap_err(),
+        FormatError::BadIndexByte { value: 12, .. }
+    ));
+    let mut s = good.clone();
+    s[0x9e] = 21;
+    fix_store_crc(&mut s);
+    assert!(matches!(
+        Store::parse(&s).unwrap_err(),
+        FormatError::BadIndexByte { value: 21, .. }
+    ));
+    // The encoder refuses what a decoder would.
+    let over = CellRecord::new(250, &[q(196, 376, 336, 376, 5)])
+        .unwrap()
+        .with_rise(6);
+    assert!(matches!(
+        encode_store_with(
+            &f,
+            &[over, CellRecord::Skipped, CellRecord::EMPTY],
+            &doc_scene()
+        ),
+        Err(FormatError::BadRise { .. })
+    ));
 }

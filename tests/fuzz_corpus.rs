@@ -116,6 +116,12 @@ fn cityjson_corpus() {
 }
 
 #[test]
+fn dem_corpus() {
+    let (n, ok) = replay("dem", |b| fuzzing::dem(b).map(drop));
+    assert!(ok > 0, "none of {n} DEMs loaded");
+}
+
+#[test]
 fn obj_corpus() {
     let (n, ok) = replay("obj", |b| fuzzing::obj(b).map(drop));
     assert!(ok > 0, "none of {n} OBJ files loaded");

@@ -91,6 +91,7 @@ fn store_bytes() -> Vec<u8> {
                             y: 100 - j,
                         },
                         level: (i % 32) as u8,
+                        deep: false,
                     })
                     .collect();
                 CellRecord::new((i % 7) as u8, &vos).unwrap()
@@ -220,7 +221,7 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
     refused(&set_u32(64, u32::MAX), "F4", "nx = u32::MAX");
     refused(&set_u32(64, 0), "F3", "nx = 0");
     // The rules of 2.0, with the checksum made right: a CRS name that is not UTF-8, or one
-    // that claims more bytes than the file has; a VO's reserved bit; a non-canonical endpoint.
+    // that claims more bytes than the file has; a non-canonical endpoint (bit 47 is 2.1's deep flag).
     let set = |at: usize, v: u8| {
         let mut b = good.clone();
         b[at] = v;
@@ -235,14 +236,10 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
     refused(&set(148, 200), "truncated", "crs_len = 200");
     // Cell 2, with one VO, starts the payload: its ground byte, then VO 0.
     let payload = INDEX + 80 + 8;
-    refused(
-        &set(payload + 1 + 5, good[payload + 1 + 5] | 0x80),
-        &format!(
-            "VO 0 of cell 2 at offset {} sets the reserved bit 47",
-            payload + 1
-        ),
-        "reserved bit",
-    );
+    // Bit 47 is the deep flag of 2.1: read, not refused.
+    std::fs::write(&path, set(payload + 1 + 5, good[payload + 1 + 5] | 0x80)).unwrap();
+    let o = vocc(&["inspect", p]);
+    assert!(o.status.success(), "deep VO: {}", stderr(&o));
     let mut b = good.clone();
     let non_canonical = QVo {
         a: QPoint {
@@ -252,6 +249,7 @@ fn damaged_stores_are_refused_by_inspect_and_pvs() {
         },
         b: QPoint::fine(1, 2),
         level: 3,
+        deep: false,
     };
     b[payload + 1..payload + 7].copy_from_slice(&non_canonical.to_bytes());
     fix_crc(&mut b);

@@ -297,6 +297,7 @@ fn run(name: &str, buildings: &[Building], offset: f64) -> (Local, Checked) {
         samples_per_object: 2,
         radius: None,
         seed: 11,
+        eye_above: None,
     };
     let mut checked = Checked::default();
     let mut records = Vec::new();

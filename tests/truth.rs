@@ -78,6 +78,7 @@ fn params(eyes: usize, samples: usize) -> TruthParams {
         samples_per_object: samples,
         radius: None,
         seed: 7,
+        eye_above: None,
     }
 }
 
@@ -427,6 +428,7 @@ fn lyon_cell_visible_set_is_plausible_and_deterministic() {
         samples_per_object: 2,
         radius: Some(600.0),
         seed: 1,
+        eye_above: None,
     };
     let (vs, rays) = visible_set_counted(&c, &s, cell, EYES, &p);
     eprintln!(
@@ -517,6 +519,7 @@ fn lyon_convergence_report() {
             samples_per_object: 1,
             radius: None,
             seed: 1,
+            eye_above: None,
         };
         let t = std::time::Instant::now();
         let pts = pool.install(|| {
@@ -571,6 +574,7 @@ fn the_ground_truth_reads_mesh_faces_never_blockers() {
         samples_per_object: 1,
         radius: None,
         seed: 12,
+        eye_above: None,
     };
     let rays: Vec<(DVec3, DVec3)> = (0..200)
         .map(|k| {

@@ -396,6 +396,7 @@ fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
         a: QPoint::fine(0, 0),
         b: QPoint::fine(0, 0),
         level: 0,
+        deep: false,
     }; VOCC_MAX_VOS];
     for (k, (v, q)) in vos.iter().zip(qs.iter_mut()).enumerate() {
         *q = QVo {
@@ -410,6 +411,7 @@ fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
                 y: v.y2,
             },
             level: v.level,
+            deep: false,
         };
         if !q.in_range() {
             return Err(fail(
@@ -690,7 +692,7 @@ pub unsafe extern "C" fn vocc_vo_geometry(
             )
         })?;
         let g = f
-            .dequantize(id, rec.ground(), q)
+            .dequantize(id, rec.stand(), q)
             .ok_or_else(|| fail(VOCC_ERR_OUTSIDE_GRID, format!("cell {id}")))?;
         *get_mut(out, "out")? = VoccVoGeom {
             a: g.a,

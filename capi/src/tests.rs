@@ -69,6 +69,7 @@ fn q(x1: u16, y1: u16, x2: u16, y2: u16, level: u8) -> QVo {
         a: QPoint::fine(x1, y1),
         b: QPoint::fine(x2, y2),
         level,
+        deep: false,
     }
 }
 
@@ -94,6 +95,7 @@ fn records() -> Vec<CellRecord> {
             y: 256 + 150,
         },
         level: 20,
+        deep: false,
     };
     cells[18] = CellRecord::new(1, &[far]).unwrap();
     cells

@@ -414,7 +414,7 @@ impl RawStore {
         let mut grid: Vec<u8> = Vec::new();
         for q in rec.vos() {
             let g = f
-                .dequantize(id, rec.ground(), q)
+                .dequantize(id, rec.stand(), q)
                 .ok_or_else(|| VoccError::new_err(format!("cell {id} is outside the grid")))?;
             geom.extend([g.a[0], g.a[1], g.b[0], g.b[1], g.g, g.h]);
             for v in [

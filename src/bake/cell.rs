@@ -19,7 +19,7 @@ use super::slice::{area_angle, choose_levels, Support};
 use super::{bounds, BlockerSet};
 use crate::geom::predicates::{convex_interiors_disjoint, point_in_convex, Containment};
 use crate::runtime::format::CellRecord;
-use crate::runtime::frame::{CellView, QVo, VoGeom, HEIGHT_LEVELS};
+use crate::runtime::frame::{CellGround, CellView, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
 
 /// The blockers the VOs of a cell may use: those whose boxes meet the cell grown by `search_m`
@@ -41,7 +41,7 @@ pub(super) struct CellSetup {
     /// The cell's polygon, counter-clockwise, local frame.
     pub(super) cell: [DVec2; 4],
     /// The cell's ground level (the frame's ground byte), and its eyes as rule 3 sees them.
-    pub(super) ground: u8,
+    pub(super) ground: CellGround,
     pub(super) view: CellView,
     /// The height of that ground level, metres (local frame).
     pub(super) g: f64,
@@ -68,13 +68,29 @@ impl CellSetup {
     // The record (an inline list of 10 VOs) is the answer, not an error: no boxing.
     #[allow(clippy::result_large_err)]
     pub(super) fn new(plan: &Plan, id: CellId) -> Result<CellSetup, CellRecord> {
+        Self::new_with(plan, id, false)
+    }
+
+    /// [`CellSetup::new`], with the VOs' bottom at the frame's lowest ground level when `deep`
+    /// (format 2.1's deep VOs, bake/terrain.rs): rule 2 then takes that bottom, so only
+    /// blockers reaching that low support them, and rule 3 hides what lies below the cell.
+    #[allow(clippy::result_large_err)]
+    pub(super) fn new_with(plan: &Plan, id: CellId, deep: bool) -> Result<CellSetup, CellRecord> {
         let f = &plan.frame;
         let cell = plan.cell_polygon(id);
-        let ground = plan.ground_level(id);
+        if !plan.eyes_fit(id) {
+            return Err(CellRecord::EMPTY);
+        }
+        let ground = plan.stand(id);
         let Some(view) = f.cell_view(id, ground) else {
             return Err(CellRecord::EMPTY);
         };
-        let (g, e0, e1) = (f.ground_z(ground), view.e0, view.e1);
+        let g = if deep {
+            f.ground_z0
+        } else {
+            f.ground_z(ground.level)
+        };
+        let (e0, e1) = (view.e0, view.e1);
         // A cell wholly inside one blocker that stands above the eyes holds no eye.
         let inside = plan.set.in_box(cell[0], cell[2]).any(|i| {
             let p = &plan.set.polys[i as usize];
@@ -154,7 +170,13 @@ impl CellSetup {
         }
         stats.hidden_cost = plan.occludees.cost_of(&all);
         // A cell without VOs stores no ground byte: its ground is 0 in the record.
-        let ground = if vos.is_empty() { 0 } else { ground };
-        CellRecord::new(ground, &vos).expect("greedy stops at max_vos, checked <= 10 in Plan::new")
+        let ground = if vos.is_empty() {
+            CellGround::default()
+        } else {
+            ground
+        };
+        CellRecord::new(ground.level, &vos)
+            .expect("greedy stops at max_vos, checked <= 10 in Plan::new")
+            .with_rise(ground.rise)
     }
 }

@@ -36,7 +36,8 @@ pub const LEVEL_FALLBACKS: usize = 3;
 pub struct Certifier<'a> {
     pub frame: &'a Frame,
     pub id: CellId,
-    pub ground: u8,
+    /// Where the cell stands: its ground level and rise.
+    pub ground: crate::runtime::frame::CellGround,
     pub cell: &'a [DVec2; 4],
     /// Eye heights and ground height: `(e0, e1, g)`.
     pub heights: (f64, f64, f64),
@@ -220,7 +221,7 @@ impl<'a> Certifier<'a> {
             let r = quantize(
                 f,
                 self.id,
-                self.ground,
+                self.ground.level,
                 level,
                 piece.a,
                 piece.b,
@@ -251,6 +252,9 @@ impl<'a> Certifier<'a> {
             stats.checks += checks;
             match r {
                 Ok(mut q) => {
+                    // Certified for a bottom below the cell's ground (`ground_z0`, a deep cell,
+                    // bake/terrain.rs): stored as a deep VO, which stands from there.
+                    q.deep = self.heights.2 < f.ground_z(self.ground.level);
                     let mut geom = f.dequantize(self.id, self.ground, &q)?;
                     stats.stored += 1;
                     if n > 0 || checks > 1 {

@@ -170,6 +170,23 @@ impl CellHashes {
         // unbaked cell records.
         g.bytes(options_key(plan.params()).as_bytes());
         g.bytes(&encode_frame(&plan.frame));
+        // The terrain's blockers and every cell's ground (bake/terrain.rs) in the global hash:
+        // a changed terrain rebakes every cell.
+        for b in scene.terrain_blockers() {
+            for v in &b.polygon {
+                g.f64(v.x);
+                g.f64(v.y);
+            }
+            g.f64(b.base);
+            g.f64(b.top);
+        }
+        if let Some(t) = &plan.ground {
+            g.bytes(&t.levels);
+            g.bytes(&t.rises);
+            for &f in &t.fits {
+                g.word(f as u64);
+            }
+        }
         // One hash per object: its box, cost and blockers (blockers are grouped by object).
         let mut object = vec![Mix::new(2); scene.objects.len()];
         for (h, o) in object.iter_mut().zip(&scene.objects) {

@@ -38,6 +38,7 @@ pub mod quantize;
 pub mod select;
 pub mod slice;
 pub mod spans;
+pub mod terrain;
 
 use glam::DVec2;
 use rstar::primitives::{GeomWithData, Rectangle};

@@ -133,6 +133,8 @@ pub struct Plan<'s> {
     pub(super) base: Vec<f64>,
     pub(super) top: Vec<f64>,
     pub occludees: Occludees,
+    /// On a terrain, every cell's ground level and whether its eyes fit the frame.
+    pub ground: Option<super::terrain::GroundTable>,
 }
 
 fn pow2_at_least(x: f64) -> f64 {
@@ -174,8 +176,10 @@ impl<'s> Plan<'s> {
         if nx * ny > 1 << 31 {
             return Err(BakeError::TooManyCells(nx * ny));
         }
-        let base: Vec<f64> = scene.blockers.iter().map(|b| b.base).collect();
-        let top: Vec<f64> = scene.blockers.iter().map(|b| b.top).collect();
+        // The objects' blockers, then the terrain's (scene/terrain.rs).
+        let all = || scene.blockers.iter().chain(scene.terrain_blockers());
+        let base: Vec<f64> = all().map(|b| b.base).collect();
+        let top: Vec<f64> = all().map(|b| b.top).collect();
         let (bmin, bmax) = base
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &b| {
@@ -191,16 +195,24 @@ impl<'s> Plan<'s> {
                 pow2_at_least(((bmax - bmin) / 255.0).max(GROUND_STEP_M)),
             )
         };
+        let grid = GridDescriptor {
+            min_x,
+            min_y,
+            cell_size: size,
+            nx: nx as u32,
+            ny: ny as u32,
+        };
+        // On a terrain, each cell stands on its least terrain height, and the eyes reach the
+        // greatest (bake/terrain.rs).
+        let ground = super::terrain::GroundTable::new(scene, &grid);
+        let (ground_z0, ground_step) = match &ground {
+            Some(t) => (t.ground_z0, t.ground_step),
+            None => (ground_z0, ground_step),
+        };
         let quantum = pow2_at_least((0.5 * size + params.search_m) / (QUANT_STEPS / 2) as f64);
         let frame = Frame {
             origin: scene.origin.to_array(),
-            grid: GridDescriptor {
-                min_x,
-                min_y,
-                cell_size: size,
-                nx: nx as u32,
-                ny: ny as u32,
-            },
+            grid,
             quantum,
             eye_lo: e0,
             eye_hi: e1,
@@ -210,10 +222,10 @@ impl<'s> Plan<'s> {
             h_ratio: H_RATIO,
         };
         let set = BlockerSet::new(
-            scene.blockers.iter().map(|b| b.polygon.clone()).collect(),
-            scene.blockers.iter().map(|b| b.top - b.base).collect(),
+            all().map(|b| b.polygon.clone()).collect(),
+            all().map(|b| b.top - b.base).collect(),
         )
-        .with_objects(scene.blockers.iter().map(|b| b.object).collect());
+        .with_objects(all().map(|b| b.object).collect());
         Ok(Plan {
             scene,
             frame,
@@ -223,6 +235,7 @@ impl<'s> Plan<'s> {
             top,
             occludees: Occludees::from_scene(scene),
             params,
+            ground,
         })
     }
 
@@ -274,6 +287,9 @@ impl<'s> Plan<'s> {
     /// ground, and where no blocker stands within the search radius.
     pub fn ground_level(&self, id: CellId) -> u8 {
         let f = &self.frame;
+        if let Some(t) = &self.ground {
+            return t.levels.get(id as usize).copied().unwrap_or(0);
+        }
         if !f.per_cell_ground() {
             return 0;
         }
@@ -299,6 +315,26 @@ impl<'s> Plan<'s> {
         ((m - f.ground_z0) / f.ground_step).ceil().clamp(0.0, 255.0) as u8
     }
 
+    /// Where the cell stands: its ground level and, on a terrain, its rise (bake/terrain.rs).
+    pub fn stand(&self, id: CellId) -> crate::runtime::frame::CellGround {
+        crate::runtime::frame::CellGround {
+            level: self.ground_level(id),
+            rise: self
+                .ground
+                .as_ref()
+                .and_then(|t| t.rises.get(id as usize).copied())
+                .unwrap_or(0),
+        }
+    }
+
+    /// Whether a camera anywhere on the cell's ground stands within its stored eye range (always
+    /// without a terrain; on one, not for the steepest cells, bake/terrain.rs).
+    pub fn eyes_fit(&self, id: CellId) -> bool {
+        self.ground
+            .as_ref()
+            .is_none_or(|t| t.fits.get(id as usize).copied().unwrap_or(false))
+    }
+
     /// Bakes one cell.
     pub fn bake_cell(&self, id: CellId) -> CellBake {
         let t0 = Instant::now();
@@ -316,7 +352,28 @@ impl<'s> Plan<'s> {
         };
         stats.levels = c.slices.clone();
         match self.params.generator {
-            Generator::Long => super::long::long_vos(self, &c, stats),
+            Generator::Long => {
+                let rec = super::long::long_vos(self, &c, stats);
+                // On a terrain, the cell is baked again with deep VOs (bottom at the lowest
+                // ground level, bake/terrain.rs); the record that hides more is kept.
+                if self.ground.is_none() || c.g <= self.frame.ground_z0 {
+                    return rec;
+                }
+                let Ok(d) = CellSetup::new_with(self, id, true) else {
+                    return rec;
+                };
+                let mut deep = CellStats {
+                    levels: d.slices.clone(),
+                    ..CellStats::default()
+                };
+                let drec = super::long::long_vos(self, &d, &mut deep);
+                if deep.hidden_cost > stats.hidden_cost {
+                    *stats = deep;
+                    drec
+                } else {
+                    rec
+                }
+            }
             Generator::Growth => super::growth::growth_vos(self, &c, stats),
         }
     }

@@ -105,6 +105,7 @@ pub fn quantize(
                 a: QPoint::fine(ka.0, ka.1),
                 b: QPoint::fine(kb.0, kb.1),
                 level,
+                deep: false,
             };
             let Some(g) = frame.dequantize(id, ground, &qvo) else {
                 continue;

@@ -59,6 +59,14 @@ pub struct ReadArgs {
     /// UTM zone of its centre.
     #[arg(long, value_name = "EPSG:N")]
     pub crs: Option<String>,
+    /// Terrain to read beside the scene: a GeoTIFF DEM (.tif, georeferenced, in the scene's CRS)
+    /// or an OBJ mesh of the ground; may be given more than once. The terrain occludes, and a
+    /// cell's eyes stand on it.
+    #[arg(long, value_name = "FILE")]
+    pub terrain: Vec<std::path::PathBuf>,
+    /// Leave out the terrain the scene files hold (a CityJSON's TINRelief, read by default).
+    #[arg(long)]
+    pub no_terrain: bool,
 }
 
 /// A usage error found after parsing (a missing or conflicting argument that clap's
@@ -128,6 +136,8 @@ impl ReadArgs {
             min_height_attr: Some(self.min_height_attr.clone()).filter(|s| !s.is_empty()),
             min_levels_attr: Some(self.min_levels_attr.clone()).filter(|s| !s.is_empty()),
             crs: self.crs.clone(),
+            terrain: self.terrain.clone(),
+            no_terrain: self.no_terrain,
         }
     }
 }

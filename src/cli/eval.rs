@@ -55,6 +55,7 @@ impl TruthArgs {
             samples_per_object: self.samples,
             radius: None,
             seed: self.seed,
+            eye_above: None,
         }
     }
 }
@@ -284,6 +285,42 @@ pub fn results(a: ResultsArgs) -> Result<()> {
             files: vec![PathBuf::from("data/denhaag/DenHaag_01.json")],
             read: ReadOptions::default(),
             flags: String::new(),
+        },
+        // Terrain (issue 32): Den Haag without its TIN, and Salt River (Cape Town) on its slope
+        // without terrain and on the 25 m DEM.
+        Dataset {
+            name: "Den Haag without terrain".into(),
+            files: vec![PathBuf::from("data/denhaag/DenHaag_01.json")],
+            read: ReadOptions {
+                no_terrain: true,
+                ..ReadOptions::default()
+            },
+            flags: "--no-terrain".into(),
+        },
+        Dataset {
+            name: "Salt River".into(),
+            files: vec![PathBuf::from(
+                "data/capetown/salt_river_footprints_utm34s.geojson",
+            )],
+            read: ReadOptions {
+                height_attr: Some("height".into()),
+                base_attr: Some("base_z".into()),
+                ..ReadOptions::default()
+            },
+            flags: "--height-attr height --base-attr base_z".into(),
+        },
+        Dataset {
+            name: "Salt River with the DEM".into(),
+            files: vec![PathBuf::from(
+                "data/capetown/salt_river_footprints_utm34s.geojson",
+            )],
+            read: ReadOptions {
+                height_attr: Some("height".into()),
+                base_attr: Some("base_z".into()),
+                terrain: vec![PathBuf::from("data/capetown/capetown_dem25m_utm34s.tif")],
+                ..ReadOptions::default()
+            },
+            flags: "--height-attr height --base-attr base_z --terrain data/capetown/capetown_dem25m_utm34s.tif".into(),
         },
         // Open LoD2 meshes: Den Haag without its ground faces (tools/denhaag_no_ground.py),
         // and Gelderseplein (3DBAG, overlapping levels of detail).

@@ -86,6 +86,21 @@ fn print_summary(out: &mut impl Write, s: &summary::Summary) -> std::io::Result<
             x.min, x.p50, x.mean, x.p90, x.max
         )
     };
+    if let Some(t) = &s.terrain {
+        for (path, format, n, pixel, nodata) in &t.sources {
+            let px = pixel.map_or(String::new(), |(x, y)| {
+                format!(", {x} x {y} m pixels, {nodata} without data near the scene")
+            });
+            writeln!(out, "terrain: {path} ({format}): {n} triangles kept{px}")?;
+        }
+        writeln!(
+            out,
+            "terrain: {} triangles, x {:.0}..{:.0}, y {:.0}..{:.0} (local), resolution {:.1} m, z {:.2}..{:.2} m, {:.1}% of the scene covered; {} solid ground blockers, {} building blockers joined with the ground",
+            t.triangles, t.extent_min[0], t.extent_max[0], t.extent_min[1], t.extent_max[1], t.resolution, t.z_min, t.z_max, 100.0 * t.scene_covered, t.blockers, t.joined
+        )?;
+    } else {
+        writeln!(out, "terrain: none")?;
+    }
     writeln!(out, "object heights (m): {}", st(&s.heights))?;
     writeln!(out, "blocker heights (m): {}", st(&s.blocker_heights))?;
     writeln!(

@@ -58,7 +58,7 @@ fn vos_json(f: &Frame, id: CellId, rec: &CellRecord, major: u16) -> Vec<serde_js
     rec.vos()
         .iter()
         .filter_map(|q| {
-            let g = f.dequantize(id, rec.ground(), q)?;
+            let g = f.dequantize(id, rec.stand(), q)?;
             Some(json!({
                 "a": [g.a[0] + o[0], g.a[1] + o[1]],
                 "b": [g.b[0] + o[0], g.b[1] + o[1]],
@@ -75,7 +75,7 @@ fn vos_json(f: &Frame, id: CellId, rec: &CellRecord, major: u16) -> Vec<serde_js
 fn cell_json(f: &Frame, id: CellId, rec: &CellRecord, major: u16) -> serde_json::Value {
     let o = f.origin;
     let r = f.grid.cell_rect(id).unwrap_or([0.0; 4]);
-    let view = f.cell_view(id, rec.ground());
+    let view = f.cell_view(id, rec.stand());
     json!({
         "cell": id,
         "rect": [r[0] + o[0], r[1] + o[1], r[2] + o[0], r[3] + o[1]],
@@ -371,11 +371,11 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
                 ),
             }
         )?;
-        if let Some(v) = f.cell_view(id, rec.ground()) {
+        if let Some(v) = f.cell_view(id, rec.stand()) {
             writeln!(out, "eyes {:.2}..{:.2} m", v.e0 + o[2], v.e1 + o[2])?;
         }
         for (k, q) in rec.vos().iter().enumerate() {
-            let Some(g) = f.dequantize(id, rec.ground(), q) else {
+            let Some(g) = f.dequantize(id, rec.stand(), q) else {
                 continue;
             };
             writeln!(
@@ -619,7 +619,7 @@ pub fn export(path: PathBuf, id: CellId, to: ExportTo) -> Result<()> {
                 )?;
                 let mut v = 0;
                 for (k, q) in rec.vos().iter().enumerate() {
-                    let Some(g) = f.dequantize(id, rec.ground(), q) else {
+                    let Some(g) = f.dequantize(id, rec.stand(), q) else {
                         continue;
                     };
                     writeln!(w, "o vo_{k}")?;

@@ -65,7 +65,8 @@ impl Default for BoundParams {
 /// The blockers whose interiors miss a cell, indexed for segment tests: the model both estimates
 /// share (every such blocker infinitely tall, heights ignored).
 struct Outside<'a> {
-    scene: &'a Scene,
+    /// The scene's blockers, then its terrain's (solid ground counts, issue 32).
+    blockers: Vec<&'a Blocker>,
     tree: RTree<GeomWithData<Rectangle<[f64; 2]>, u32>>,
 }
 
@@ -76,19 +77,23 @@ impl<'a> Outside<'a> {
 
     /// The blockers outside the cell that `keep` accepts.
     fn with(scene: &'a Scene, cell: &[DVec2; 4], keep: impl Fn(&Blocker) -> bool) -> Self {
+        let blockers: Vec<&Blocker> = scene
+            .blockers
+            .iter()
+            .chain(scene.terrain_blockers())
+            .collect();
         let tree = RTree::bulk_load(
-            (0..scene.blockers.len())
+            (0..blockers.len())
                 .filter(|&i| {
-                    keep(&scene.blockers[i])
-                        && convex_interiors_disjoint(&scene.blockers[i].polygon, cell)
+                    keep(blockers[i]) && convex_interiors_disjoint(&blockers[i].polygon, cell)
                 })
                 .map(|i| {
-                    let (lo, hi) = bounds(&scene.blockers[i].polygon);
+                    let (lo, hi) = bounds(&blockers[i].polygon);
                     GeomWithData::new(Rectangle::from_corners(lo, hi), i as u32)
                 })
                 .collect(),
         );
-        Outside { scene, tree }
+        Outside { blockers, tree }
     }
 
     fn is_empty(&self) -> bool {
@@ -113,8 +118,8 @@ impl<'a> Outside<'a> {
     ) -> bool {
         let meets = |i: usize| {
             !own.contains(&i)
-                && keep(&self.scene.blockers[i])
-                && segment_meets_convex(a, b, &self.scene.blockers[i].polygon)
+                && keep(self.blockers[i])
+                && segment_meets_convex(a, b, &self.blockers[i].polygon)
         };
         if let Some(h) = *hint {
             if meets(h as usize) {

@@ -103,9 +103,8 @@ pub fn sample_cells(store: &Store, n: Option<usize>, seed: u64) -> Vec<CellId> {
 fn truncated(rec: &CellRecord, k: usize) -> CellRecord {
     match rec {
         CellRecord::Skipped => CellRecord::Skipped,
-        CellRecord::Vos { ground, vos } => {
-            CellRecord::new(*ground, &vos[..k.min(vos.len())]).unwrap_or(CellRecord::EMPTY)
-        }
+        CellRecord::Vos { ground, rise, vos } => CellRecord::new(*ground, &vos[..k.min(vos.len())])
+            .map_or(CellRecord::EMPTY, |r| r.with_rise(*rise)),
     }
 }
 
@@ -120,9 +119,14 @@ pub fn cell_vs(
     let f = store.frame();
     let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
     let rect = f.grid.cell_rect(id).unwrap_or([0.0; 4]);
-    let view = f.cell_view(id, rec.ground());
+    let view = f.cell_view(id, rec.stand());
     let (e0, e1) = view.map(|v| (v.e0, v.e1)).unwrap_or((0.0, 0.0));
-    visible_set(caster, scene, rect, (e0, e1), truth)
+    // On a terrain, eyes stand on it at the frame's eye heights over the whole cell.
+    let truth = TruthParams {
+        eye_above: Some((f.eye_lo, f.eye_hi)),
+        ..truth.clone()
+    };
+    visible_set(caster, scene, rect, (e0, e1), &truth)
 }
 
 /// Evaluates one cell against its visible set `vs` (ascending).
@@ -214,9 +218,11 @@ pub fn vo_rays(
     use glam::DVec3;
     let f = store.frame();
     let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
-    let (Some(r), Some(view)) = (f.grid.cell_rect(id), f.cell_view(id, rec.ground())) else {
+    let (Some(r), Some(view)) = (f.grid.cell_rect(id), f.cell_view(id, rec.stand())) else {
         return VoRays::default();
     };
+    // On a terrain, eyes stand on it at the frame's eye heights (a camera on the ground).
+    let eye_above = Some((f.eye_lo, f.eye_hi));
     let mut state = seed ^ (id as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
     let mut u = move || {
         state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
@@ -227,15 +233,19 @@ pub fn vo_rays(
     };
     let mut out = VoRays::default();
     for q in rec.vos() {
-        let Some(g) = f.dequantize(id, rec.ground(), q) else {
+        let Some(g) = f.dequantize(id, rec.stand(), q) else {
             continue;
         };
         for _ in 0..eyes {
-            let eye = DVec3::new(
-                r[0] + u() * (r[2] - r[0]),
-                r[1] + u() * (r[3] - r[1]),
-                view.e0 + u() * (view.e1 - view.e0),
-            );
+            let (x, y, s) = (r[0] + u() * (r[2] - r[0]), r[1] + u() * (r[3] - r[1]), u());
+            // On the terrain where there is one (a camera on the ground), as the ground truth.
+            let ground =
+                eye_above.and_then(|e| Some((e, caster.ground_height(glam::DVec2::new(x, y))?)));
+            let z = match ground {
+                Some(((lo, hi), g)) => g + lo + s * (hi - lo),
+                None => view.e0 + s * (view.e1 - view.e0),
+            };
+            let eye = DVec3::new(x, y, z);
             if caster.contains(eye).is_some() {
                 continue;
             }

@@ -12,6 +12,7 @@
 //! build the PVS with the runtime culler, from the store's bytes, as an engine does.
 
 pub mod bound;
+pub mod ground;
 pub mod metrics;
 pub mod picture;
 pub mod plot;

@@ -41,6 +41,41 @@ pub fn cell_picture(
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{}" font-family="sans-serif" font-size="13"><rect width="100%" height="100%" fill="white"/>"#,
         size + 80.0
     );
+    // The terrain, shaded: height as a green-to-brown tint, lit from the north-west.
+    if let Some(t) = &scene.terrain {
+        let span = (t.zmax - t.zmin).max(1.0);
+        for tri in &t.triangles {
+            let lo = tri[0].min(tri[1]).min(tri[2]);
+            let hi = tri[0].max(tri[1]).max(tri[2]);
+            if hi.x < cx - radius || lo.x > cx + radius || hi.y < cy - radius || lo.y > cy + radius
+            {
+                continue;
+            }
+            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+            let light = glam::DVec3::new(-0.5, 0.5, 0.7).normalize();
+            let shade = (0.55 + 0.45 * n.dot(light).abs()).clamp(0.0, 1.0);
+            let h = ((tri[0].z + tri[1].z + tri[2].z) / 3.0 - t.zmin) / span;
+            let rgb = [
+                (170.0 + 60.0 * h) * shade,
+                (200.0 - 40.0 * h) * shade,
+                (150.0 - 30.0 * h) * shade,
+            ]
+            .map(|v| v.clamp(0.0, 255.0) as u8);
+            let _ = write!(
+                s,
+                r##"<polygon points="{} {} {}" fill="#{:02x}{:02x}{:02x}" stroke="#{:02x}{:02x}{:02x}" stroke-width="0.8"/>"##,
+                p(tri[0].x, tri[0].y),
+                p(tri[1].x, tri[1].y),
+                p(tri[2].x, tri[2].y),
+                rgb[0],
+                rgb[1],
+                rgb[2],
+                rgb[0],
+                rgb[1],
+                rgb[2]
+            );
+        }
+    }
     let (mut n_vis, mut n_fused, mut n_single) = (0, 0, 0);
     for o in &scene.objects {
         let b = o.bbox;
@@ -148,7 +183,7 @@ pub fn cell_picture(
     let px = |x: f64, y: f64| ((x - cx + radius) * k, (radius - (y - cy)) * k);
     let mut beyond = 0;
     for (i, q) in rec.vos().iter().enumerate() {
-        let Some(g) = f.dequantize(id, rec.ground(), q) else {
+        let Some(g) = f.dequantize(id, rec.stand(), q) else {
             continue;
         };
         // Only the part of the VO inside the view is drawn, and its number stands where that

@@ -197,6 +197,8 @@ pub struct Caster {
     elem_cum: Vec<f64>,
     bounds: Bounds,
     grid: Grid,
+    /// The terrain as solid ground, from its own triangles ([`super::ground`]).
+    ground: Option<super::ground::Ground>,
 }
 
 /// Twice the signed area of a ring given as edges.
@@ -265,6 +267,7 @@ impl Caster {
                 starts: vec![0, 0],
                 list: Vec::new(),
             },
+            ground: super::ground::Ground::new(scene),
         };
         for (oi, o) in scene.objects.iter().enumerate() {
             let e0 = c.elems.len() as u32;
@@ -575,10 +578,28 @@ impl Caster {
         }
     }
 
+    /// The terrain's height over `p` (local xy), where the scene has a terrain that holds `p`:
+    /// where the ground truth's eyes stand.
+    pub fn ground_height(&self, p: DVec2) -> Option<f64> {
+        self.ground.as_ref()?.height(p)
+    }
+
     /// The nearest object met by the ray `origin + t * dir`, `0 <= t < t_max`, and its `t` (in
-    /// units of `dir`, which need not be unit). Of two hits at exactly the same `t`, either may be
+    /// units of `dir`, which need not be unit); the terrain ([`super::ground`]) is reported as
+    /// [`crate::scene::TERRAIN_OBJECT`]. Of two hits at exactly the same `t`, either may be
     /// reported.
     pub fn first_hit(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<(u32, f64)> {
+        let hit = self.first_object_hit(origin, dir, t_max);
+        let Some(g) = &self.ground else { return hit };
+        let limit = hit.map_or(t_max, |(_, t)| t);
+        match g.first_below(origin, dir, limit) {
+            Some(t) if t < limit => Some((crate::scene::TERRAIN_OBJECT, t)),
+            _ => hit,
+        }
+    }
+
+    /// [`Caster::first_hit`] over the objects alone.
+    fn first_object_hit(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<(u32, f64)> {
         if !(t_max > 0.0) || dir == DVec3::ZERO || !dir.is_finite() || !origin.is_finite() {
             return None;
         }
@@ -673,7 +694,15 @@ impl Caster {
                 found = Some((it, t));
             }
         }
-        found.map(|(it, t)| (self.object_of(it), t))
+        let hit = found.map(|(it, t)| (self.object_of(it), t));
+        match self
+            .ground
+            .as_ref()
+            .and_then(|g| g.first_below_brute(origin, dir, best))
+        {
+            Some(t) if t < best => Some((crate::scene::TERRAIN_OBJECT, t)),
+            _ => hit,
+        }
     }
 
     /// An object whose solid holds `p`, if any: a footprint polygon with `base <= z <= top` and

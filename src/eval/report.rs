@@ -292,7 +292,7 @@ pub fn dataset_section(
     for &id in sample_cells(&store, Some(3), p.seed + 1).iter() {
         let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
         let rect = store.frame().grid.cell_rect(id).unwrap_or([0.0; 4]);
-        let v = store.frame().cell_view(id, rec.ground()).expect("in grid");
+        let v = store.frame().cell_view(id, rec.stand()).expect("in grid");
         let pts =
             super::truth::convergence(&caster, &s, rect, (v.e0, v.e1), &p.truth, &eyes, &samples);
         let cells: Vec<String> = pts.iter().map(|c| c.vs.to_string()).collect();
@@ -316,7 +316,7 @@ pub fn dataset_section(
             .par_iter()
             .zip(&vs_sample)
             .map(|(&id, vs)| {
-                let ground = |st: &Store| st.cell(id).map(|r| r.ground()).ok();
+                let ground = |st: &Store| st.cell(id).map(|r| r.stand()).ok();
                 if ground(st) == ground(&store) {
                     vs.clone()
                 } else {
@@ -492,10 +492,10 @@ pub fn dataset_section(
         .map(|(&id, vs)| {
             let f = store.frame();
             let r = f.grid.cell_rect(id).expect("in grid");
-            let ground = store.cell(id).map_or(0, |c| c.ground());
+            let ground = store.cell(id).map_or(Default::default(), |c| c.stand());
             let view = f.cell_view(id, ground).expect("in grid");
             let h = Heights {
-                g: f.ground_z(ground),
+                g: f.ground_z(ground.level),
                 e0: view.e0,
                 e1: view.e1,
             };
@@ -526,7 +526,7 @@ pub fn dataset_section(
                 .binary_search_by_key(&id, |c| c.id)
                 .expect("baked")];
             let rec = store.cell(id).unwrap_or(CellRecord::EMPTY);
-            let view = f.cell_view(id, rec.ground()).expect("in grid");
+            let view = f.cell_view(id, rec.stand()).expect("in grid");
             let pvs = pvs_from_geoms(&view, &c.stats.unquantized, &boxes);
             compare(&s, id, c.stats.unquantized.len(), vs, &pvs)
         })

@@ -13,7 +13,7 @@
 //!   count; more eyes or samples (same seed) give a superset (eye `i` and sample `k` of an object
 //!   do not depend on how many there are).
 
-use glam::{DVec2, DVec3};
+use glam::DVec2;
 use rayon::prelude::*;
 
 use super::raycast::Caster;
@@ -40,6 +40,10 @@ pub struct TruthParams {
     /// `None`: all. Objects outside may still be reported as blockers of a ray.
     pub radius: Option<f64>,
     pub seed: u64,
+    /// Eye heights above the terrain, `(lo, hi)`: where the scene has a terrain under an eye's
+    /// point, the eye stands at the terrain's height there plus a height uniform in this range
+    /// (a camera on the ground); elsewhere, and when `None`, uniform in the cell's eye range.
+    pub eye_above: Option<(f64, f64)>,
 }
 
 impl Default for TruthParams {
@@ -49,6 +53,7 @@ impl Default for TruthParams {
             samples_per_object: 4,
             radius: None,
             seed: 0x7275_7468,
+            eye_above: None,
         }
     }
 }
@@ -99,6 +104,7 @@ fn targets(scene: &Scene, cell: [f64; 4], radius: Option<f64>) -> Vec<u32> {
 /// The first object each ray hits from one eye of the cell, over `samples` samples per target.
 /// The eye stands at `first` (fractions of the cell's sides), or, if that is inside an object, at
 /// a point drawn from `eye_seed`. Returns the sorted, deduplicated hits and the number of rays.
+#[allow(clippy::too_many_arguments)]
 fn eye_hits(
     caster: &Caster,
     cell: [f64; 4],
@@ -107,6 +113,7 @@ fn eye_hits(
     samples: usize,
     eye_seed: u64,
     first: (f64, f64),
+    eye_above: Option<(f64, f64)>,
 ) -> (Vec<u32>, u64) {
     let mut rng = Rng(eye_seed);
     let mut eye = None;
@@ -116,11 +123,19 @@ fn eye_hits(
         } else {
             (rng.f64(), rng.f64())
         };
-        let p = DVec3::new(
+        let xy = DVec2::new(
             cell[0] + (cell[2] - cell[0]) * u,
             cell[1] + (cell[3] - cell[1]) * v,
-            eye_z.0 + (eye_z.1 - eye_z.0) * rng.f64(),
         );
+        let (s, ground) = (
+            rng.f64(),
+            eye_above.and_then(|e| Some((e, caster.ground_height(xy)?))),
+        );
+        let z = match ground {
+            Some(((lo, hi), g)) => g + lo + (hi - lo) * s,
+            None => eye_z.0 + (eye_z.1 - eye_z.0) * s,
+        };
+        let p = xy.extend(z);
         if caster.contains(p).is_none() {
             eye = Some(p);
             break;
@@ -141,7 +156,11 @@ fn eye_hits(
             };
             rays += 1;
             match caster.first_hit(eye, q - eye, 1.0 + TARGET_SLACK) {
-                Some((o, t)) if t < 1.0 - REACH_TOLERANCE => hits.push(o),
+                Some((o, t)) if t < 1.0 - REACH_TOLERANCE => {
+                    if o != crate::scene::TERRAIN_OBJECT {
+                        hits.push(o)
+                    }
+                }
                 // Reached (or, by rounding, nothing at all met before the target point).
                 _ => {
                     if !seen {
@@ -197,6 +216,7 @@ pub fn visible_set_counted(
                 p.samples_per_object,
                 eye_seed(p.seed, cell, eye_z, i),
                 r2(shift, i),
+                p.eye_above,
             )
         })
         .collect();

@@ -780,9 +780,10 @@ pub fn pvs_with_stats(
         st.visible = out.len();
         st
     };
+    // Where the cell stands: its ground level and, in 2.1, its rise (the top eye).
     let (ground, vos) = match rec {
         CellRecord::Skipped => return all(out, st),
-        CellRecord::Vos { ground, vos } => (*ground, vos.as_slice()),
+        CellRecord::Vos { vos, .. } => (rec.stand(), vos.as_slice()),
     };
     let Some(view) = frame.cell_view(id, ground) else {
         return all(out, st);
@@ -940,6 +941,7 @@ mod tests {
             a: QPoint::fine(k(a[0], 250.0), k(a[1], 250.0)),
             b: QPoint::fine(k(b[0], 250.0), k(b[1], 250.0)),
             level,
+            deep: false,
         }
     }
 
@@ -1069,6 +1071,7 @@ mod tests {
                     a: QPoint::fine((r.next() * 512.0) as u16, (r.next() * 512.0) as u16),
                     b: QPoint::fine((r.next() * 512.0) as u16, (r.next() * 512.0) as u16),
                     level: (r.next() * 16.0) as u8,
+                    deep: false,
                 }
             };
             if !q.is_degenerate() {

@@ -10,7 +10,9 @@
 //!   exact in f64, so the bake's verifier checks exactly the segment the runtime uses;
 //! - the VO top of level `k` (`0..32`; format 1: `0..16`) is `e1 + h0 * (h_ratio^k - 1)`, computed by one function
 //!   ([`Frame::vo_top`]) that the bake also uses: the bake checks what the runtime will read;
-//! - the VO bottom `g` is the cell's ground, and the eyes stand at `g + eye_lo ..= g + eye_hi`.
+//! - the VO bottom is the cell's ground `g` (or, for a deep VO of format 2.1, `ground_z0`), and
+//!   the eyes stand at `g + eye_lo ..= g + rise * ground_step + eye_hi` (the rise of format 2.1;
+//!   0 in 2.0).
 
 use crate::runtime::grid::{CellId, GridDescriptor};
 
@@ -110,12 +112,16 @@ impl QPoint {
     }
 }
 
-/// One VO as stored: two endpoints and a height level.
+/// One VO as stored: two endpoints, a height level and where its bottom stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct QVo {
     pub a: QPoint,
     pub b: QPoint,
     pub level: u8,
+    /// Store format 2.1 (bit 47): the VO stands from the frame's lowest ground level
+    /// (`ground_z0`) rather than from its cell's ground, so that it may hide what lies below the
+    /// cell (downhill). Its supporters reach that low (rule 2; ARCHITECTURE.md, "Terrain").
+    pub deep: bool,
 }
 
 /// Bytes of a VO in store format 2.
@@ -126,18 +132,20 @@ pub const VO_BYTES_V1: usize = 5;
 impl QVo {
     /// The 6 stored bytes of format 2: a 48-bit little-endian word with endpoint `a` in bits
     /// 0..21 (`e` 0..3, `x` 3..12, `y` 12..21), endpoint `b` in 21..42 (same layout), the level
-    /// in 42..47, and bit 47 clear (reserved). Fields must be in range.
+    /// in 42..47, and bit 47 the deep flag (2.1; clear in 2.0). Fields must be in range.
     pub fn to_bytes(&self) -> [u8; VO_BYTES] {
         let p = |q: &QPoint| -> u64 {
             (q.e as u64 & 0x7) | (q.x as u64 & 0x1ff) << 3 | (q.y as u64 & 0x1ff) << 12
         };
-        let w: u64 = p(&self.a) | p(&self.b) << 21 | (self.level as u64 & 0x1f) << 42;
+        let w: u64 = p(&self.a)
+            | p(&self.b) << 21
+            | (self.level as u64 & 0x1f) << 42
+            | (self.deep as u64) << 47;
         let b = w.to_le_bytes();
         [b[0], b[1], b[2], b[3], b[4], b[5]]
     }
 
-    /// Inverse of [`QVo::to_bytes`] for every 6-byte value whose reserved bit 47 is clear (the
-    /// decoders check that bit, [`QVo::reserved_bit`]).
+    /// Inverse of [`QVo::to_bytes`] for every 6-byte value.
     pub fn from_bytes(b: [u8; VO_BYTES]) -> QVo {
         let w = u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], 0, 0]);
         let p = |v: u64| QPoint {
@@ -149,10 +157,11 @@ impl QVo {
             a: p(w),
             b: p(w >> 21),
             level: (w >> 42 & 0x1f) as u8,
+            deep: w >> 47 & 1 == 1,
         }
     }
 
-    /// Bit 47 of a format-2 VO, reserved: a format 2.0 decoder rejects a VO that sets it.
+    /// Bit 47 of a format-2 VO: the deep flag of format 2.1, which a 2.0 decoder rejects.
     pub fn reserved_bit(b: [u8; VO_BYTES]) -> bool {
         b[5] & 0x80 != 0
     }
@@ -177,12 +186,13 @@ impl QVo {
             a: QPoint::fine((w & 0x1ff) as u16, (w >> 9 & 0x1ff) as u16),
             b: QPoint::fine((w >> 18 & 0x1ff) as u16, (w >> 27 & 0x1ff) as u16),
             level: (w >> 36 & 0xf) as u8,
+            deep: false,
         }
     }
 
     /// Whether store format 1 can hold this VO: exponents 0, level below 16.
     pub fn fits_v1(&self) -> bool {
-        self.a.e == 0 && self.b.e == 0 && self.level < HEIGHT_LEVELS_V1
+        self.a.e == 0 && self.b.e == 0 && self.level < HEIGHT_LEVELS_V1 && !self.deep
     }
 
     /// Whether every field lies in its range (format 2).
@@ -198,6 +208,21 @@ impl QVo {
     /// Both endpoints at the same position: a zero-length VO, which a decoder rejects.
     pub fn is_degenerate(&self) -> bool {
         self.a.steps() == self.b.steps()
+    }
+}
+
+/// Where a cell stands: its ground level and rise (`CellRecord::Vos`), what
+/// [`crate::runtime::Frame::cell_view`] and [`crate::runtime::Frame::dequantize`] need. A bare
+/// level converts to it with rise 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct CellGround {
+    pub level: u8,
+    pub rise: u8,
+}
+
+impl From<u8> for CellGround {
+    fn from(level: u8) -> CellGround {
+        CellGround { level, rise: 0 }
     }
 }
 
@@ -238,15 +263,22 @@ impl Frame {
         ])
     }
 
-    /// The view of a cell standing on ground level `ground`.
-    pub fn cell_view(&self, id: CellId, ground: u8) -> Option<CellView> {
+    /// The view of a cell standing on `ground` (a level, or a level and a rise): its eyes
+    /// from `g + eye_lo` to `g + rise * ground_step + eye_hi`, `g` the level's height.
+    pub fn cell_view(&self, id: CellId, ground: impl Into<CellGround>) -> Option<CellView> {
+        let s = ground.into();
         let rect = self.grid.cell_rect(id)?;
-        let g = self.ground_z(ground);
+        let g = self.ground_z(s.level);
         Some(CellView {
             rect,
             e0: g + self.eye_lo,
-            e1: g + self.eye_hi,
+            e1: self.top_eye(s),
         })
+    }
+
+    /// The top eye of a cell standing on `s`: `ground_z(level) + rise * ground_step + eye_hi`.
+    pub fn top_eye(&self, s: CellGround) -> f64 {
+        self.ground_z(s.level) + s.rise as f64 * self.ground_step + self.eye_hi
     }
 
     /// VO top of level `level` for a cell whose top eye is at `e1`.
@@ -254,15 +286,18 @@ impl Frame {
         e1 + self.h0 * (pow_u8(self.h_ratio, level) - 1.0)
     }
 
-    /// The geometry of a stored VO of cell `id` standing on ground level `ground`.
-    pub fn dequantize(&self, id: CellId, ground: u8, q: &QVo) -> Option<VoGeom> {
+    /// The geometry of a stored VO of cell `id` standing on `ground` (a level, or a level and a
+    /// rise): from the cell's ground, or from `ground_z0` for a deep VO (format 2.1), to the top
+    /// of its level above the cell's top eye.
+    pub fn dequantize(&self, id: CellId, ground: impl Into<CellGround>, q: &QVo) -> Option<VoGeom> {
+        let s = ground.into();
         let c = self.cell_centre(id)?;
-        let g = self.ground_z(ground);
+        let g = self.ground_z(s.level);
         Some(VoGeom {
             a: add(c, q.a.offset(self.quantum)),
             b: add(c, q.b.offset(self.quantum)),
-            g,
-            h: self.vo_top(g + self.eye_hi, q.level),
+            g: if q.deep { self.ground_z0 } else { g },
+            h: self.vo_top(self.top_eye(s), q.level),
         })
     }
 }
@@ -299,6 +334,7 @@ mod tests {
             a: QPoint { e: 1, x: 2, y: 3 },
             b: QPoint { e: 7, x: 511, y: 4 },
             level: 31,
+            deep: false,
         };
         // 1 | 2<<3 | 3<<12 | (7 | 511<<3 | 4<<12)<<21 | 31<<42
         let w: u64 = 1 | 2 << 3 | 3 << 12 | (7 | 511 << 3 | 4 << 12) << 21 | 31 << 42;
@@ -314,6 +350,9 @@ mod tests {
             assert_eq!(QVo::from_bytes(b).to_bytes(), b);
         }
         assert!(QVo::reserved_bit([0, 0, 0, 0, 0, 0x80]));
+        let deep = QVo { deep: true, ..q };
+        assert_eq!(deep.to_bytes(), [0x11, 0x30, 0xe0, 0xff, 0x09, 0xfc]);
+        assert_eq!(QVo::from_bytes(deep.to_bytes()), deep);
     }
 
     #[test]
@@ -322,6 +361,7 @@ mod tests {
             a: QPoint::fine(1, 2),
             b: QPoint::fine(3, 511),
             level: 15,
+            deep: false,
         };
         // 1 | 2<<9 | 3<<18 | 511<<27 | 15<<36
         assert_eq!(q.to_bytes_v1(), [0x01, 0x04, 0x0c, 0xf8, 0xff]);
@@ -401,6 +441,7 @@ mod tests {
             a: QPoint { e: 0, x: 0, y: 511 },
             b: QPoint { e: 7, x: 511, y: 0 },
             level: 0,
+            deep: false,
         };
         let g = f.dequantize(4, 0, &q).unwrap();
         assert_eq!(g.a, [150.0 - 64.0, 150.0 + 63.75]);

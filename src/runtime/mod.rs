@@ -29,7 +29,7 @@
 //!     h_ratio: 1.25,
 //! };
 //! // The bake writes the store: cell 0 has a 70 m wall 60 m north of its centre.
-//! let wall = QVo { a: QPoint::fine(196, 376), b: QPoint::fine(336, 376), level: 5 };
+//! let wall = QVo { a: QPoint::fine(196, 376), b: QPoint::fine(336, 376), level: 5, deep: false };
 //! let bytes = encode_store(&frame, &[CellRecord::new(0, &[wall])?, CellRecord::EMPTY])?;
 //!
 //! // The engine: parse once, build the tree once (boxes in the local frame, or

@@ -151,6 +151,35 @@ pub fn read_cityjson(path: &Path, v: &Value, opts: &ReadOptions) -> Result<FileR
             .get("type")
             .and_then(|t| t.as_str())
             .unwrap_or("(no type)");
+        if ty == "TINRelief" && !opts.no_terrain && !opts.types.iter().any(|t| t == ty) {
+            // The terrain (scene/terrain.rs): every surface of its geometries, as triangles.
+            let geoms: &[Value] = match obj.get("geometry") {
+                Some(Value::Array(a)) => a,
+                None | Some(Value::Null) => &[],
+                Some(_) => return Err(malformed(at(), "\"geometry\" is not an array".into())),
+            };
+            let mut b = MeshBuilder {
+                all: &vertices,
+                map: HashMap::new(),
+                mesh: Mesh::default(),
+            };
+            for g in geoms {
+                let gty = g.get("type").and_then(|t| t.as_str()).unwrap_or("");
+                let kind = match kind_of(gty) {
+                    Some(k @ (Kind::Surfaces | Kind::Solid | Kind::Solids)) => k,
+                    _ => continue,
+                };
+                let Some(bnd) = g.get("boundaries") else {
+                    return Err(malformed(at(), "a geometry has no \"boundaries\"".into()));
+                };
+                b.geometry(bnd, kind).map_err(|m| malformed(at(), m))?;
+            }
+            out.terrain.extend(super::terrain::fan_triangles(&b.mesh));
+            *out.other_types
+                .entry("TINRelief (read as terrain)".into())
+                .or_default() += 1;
+            continue;
+        }
         if ty != "Building" && ty != "BuildingPart" && !opts.types.iter().any(|t| t == ty) {
             *out.other_types.entry(ty.to_string()).or_default() += 1;
             continue;

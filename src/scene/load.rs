@@ -26,9 +26,9 @@ use rayon::prelude::*;
 use super::crs::{self, Crs, CrsSource, Projector};
 use super::error::{check_coord, CrsConflict, LoadError, LoadErrorKind, Location};
 use super::{
-    citygml, decompose, fgb, footprint, gpkg, json, obj, osm, shp, solid, walls, Aabb3, Blocker,
-    FileRead, FileStats, Footprint, NoBlocker, Object, RawObject, ReadOptions, RingRepair, Scene,
-    SceneReport, Shape, SkipReason,
+    citygml, decompose, dem, fgb, footprint, gpkg, json, obj, osm, shp, solid, terrain, walls,
+    Aabb3, Blocker, FileRead, FileStats, Footprint, NoBlocker, Object, RawObject, ReadOptions,
+    RingRepair, Scene, SceneReport, Shape, SkipReason, Terrain, TerrainSource,
 };
 
 /// Size of the grid the scene origin snaps to, metres.
@@ -235,7 +235,12 @@ fn build_scene(
     let mut lods = std::collections::BTreeSet::new();
     // Input feature numbers: each file's items follow the previous files'.
     let mut offset: u32 = 0;
+    // CityJSON TINReliefs: (file, triangles), world.
+    let mut tins: Vec<(PathBuf, Vec<[DVec3; 3]>)> = Vec::new();
     for (fi, ((mut read, format), path)) in reads.into_iter().zip(&paths).enumerate() {
+        if !read.terrain.is_empty() {
+            tins.push((path.clone(), std::mem::take(&mut read.terrain)));
+        }
         for o in &mut read.objects {
             o.feature = o.feature.saturating_add(offset);
         }
@@ -325,6 +330,10 @@ fn build_scene(
         .timings
         .push(("footprints and meshes", t.elapsed().as_secs_f64()));
 
+    let t = Instant::now();
+    let mut terrain = build_terrain(tins, opts, origin, world, scene_crs.as_ref())?;
+    report.timings.push(("terrain", t.elapsed().as_secs_f64()));
+
     let mut objects = Vec::with_capacity(built.len());
     let mut blockers = Vec::new();
     for b in built {
@@ -338,6 +347,9 @@ fn build_scene(
         blockers.extend(b.blockers);
         objects.push(b.object);
     }
+    if let Some(t) = &mut terrain {
+        t.join(&mut blockers);
+    }
     Ok(Scene {
         origin,
         files: paths,
@@ -345,7 +357,104 @@ fn build_scene(
         blockers,
         report,
         crs: scene_crs,
+        terrain,
     })
+}
+
+/// The scene's terrain: the TINReliefs the scene files hold and the `--terrain` files (GeoTIFF
+/// DEMs, OBJ meshes), kept within [`terrain::TERRAIN_MARGIN_M`] of the objects' extent `world`,
+/// in the local frame of `origin`. `None` when there is none.
+fn build_terrain(
+    tins: Vec<(PathBuf, Vec<[DVec3; 3]>)>,
+    opts: &ReadOptions,
+    origin: DVec3,
+    world: Aabb3,
+    crs: Option<&Crs>,
+) -> Result<Option<Terrain>, LoadError> {
+    let m = DVec2::splat(terrain::TERRAIN_MARGIN_M);
+    let (lo, hi) = (world.min.truncate() - m, world.max.truncate() + m);
+    let keep = |t: &[DVec3; 3]| {
+        let (a, b) = (
+            t[0].truncate().min(t[1].truncate()).min(t[2].truncate()),
+            t[0].truncate().max(t[1].truncate()).max(t[2].truncate()),
+        );
+        a.x <= hi.x && a.y <= hi.y && b.x >= lo.x && b.y >= lo.y
+    };
+    let mut sources = Vec::new();
+    let mut all: Vec<[DVec3; 3]> = Vec::new();
+    let mut add =
+        |path: PathBuf, format, tris: Vec<[DVec3; 3]>, pixel, nodata, all: &mut Vec<[DVec3; 3]>| {
+            let before = all.len();
+            all.extend(tris.into_iter().filter(keep).map(|t| t.map(|p| p - origin)));
+            sources.push(TerrainSource {
+                path,
+                format,
+                triangles: all.len() - before,
+                pixel,
+                nodata,
+            });
+        };
+    for (path, tris) in tins {
+        add(path, "CityJSON TINRelief", tris, None, 0, &mut all);
+    }
+    for path in &opts.terrain {
+        let io = |e: std::io::Error| {
+            LoadError::new(path, Location::File, LoadErrorKind::Io(e.to_string()))
+        };
+        let bytes = std::fs::read(path).map_err(io)?;
+        match extension(path).as_str() {
+            "tif" | "tiff" => {
+                let d = dem::read_dem(path, &bytes, Some((lo, hi)))?;
+                if let (Some(e), Some(c)) = (d.epsg, crs.and_then(|c| c.epsg)) {
+                    if e != c {
+                        return Err(LoadError::new(
+                            path,
+                            Location::File,
+                            LoadErrorKind::Malformed {
+                                format: "GeoTIFF",
+                                message: format!("the DEM is in EPSG:{e} and the scene in EPSG:{c}: reproject the DEM (gdalwarp -t_srs EPSG:{c})"),
+                            },
+                        ));
+                    }
+                }
+                add(path.clone(), "GeoTIFF DEM", d.triangles, Some(d.pixel), d.nodata, &mut all);
+            }
+            "obj" => {
+                let read = obj::read_obj(path, &bytes, opts)?;
+                let mut tris = Vec::new();
+                for o in read.objects {
+                    if let Shape::Mesh(mesh) = o.shape {
+                        tris.extend(terrain::fan_triangles(&mesh));
+                    }
+                }
+                add(path.clone(), "OBJ mesh", tris, None, 0, &mut all);
+            }
+            _ => {
+                return Err(LoadError::new(
+                    path,
+                    Location::File,
+                    LoadErrorKind::UnsupportedFormat {
+                        format: "terrain".into(),
+                        hint: "--terrain reads GeoTIFF DEMs (.tif) and OBJ meshes (.obj); convert others with gdal_translate -of GTiff".into(),
+                    },
+                ))
+            }
+        }
+        if all.len() > terrain::MAX_TRIANGLES {
+            return Err(LoadError::new(
+                path,
+                Location::File,
+                LoadErrorKind::Malformed {
+                    format: "terrain",
+                    message: format!(
+                        "more than {} triangles near the scene; use a coarser DEM",
+                        terrain::MAX_TRIANGLES
+                    ),
+                },
+            ));
+        }
+    }
+    Ok(Terrain::new(sources, all))
 }
 
 /// The CRS of each file (stated or detected) and of the scene, with every object projected into

@@ -20,6 +20,7 @@ pub mod citygml;
 pub mod cityjson;
 pub mod crs;
 pub mod decompose;
+pub mod dem;
 pub mod error;
 pub mod fgb;
 pub mod fingerprint;
@@ -34,6 +35,7 @@ pub mod osm;
 pub mod shp;
 pub mod solid;
 pub mod summary;
+pub mod terrain;
 pub mod walkable;
 pub mod walls;
 pub mod wkb;
@@ -47,6 +49,7 @@ use glam::{DVec2, DVec3};
 pub use crs::{Crs, CrsSource};
 pub use error::{CrsConflict, LoadError, LoadErrorKind, Location};
 pub use load::{load, load_bytes};
+pub use terrain::{Terrain, TerrainSource, TERRAIN_OBJECT};
 
 /// Options shared by the readers.
 #[derive(Clone, Debug)]
@@ -81,6 +84,12 @@ pub struct ReadOptions {
     /// The CRS to project the scene into (`EPSG:N`); `None`: the first projected CRS of the
     /// input, or for longitude/latitude input the UTM zone of its centre ([`crs`]).
     pub crs: Option<String>,
+    /// Terrain files read beside the scene (`--terrain`): GeoTIFF DEMs (`.tif`, `.tiff`) and
+    /// OBJ meshes ([`terrain`]).
+    pub terrain: Vec<PathBuf>,
+    /// Leave out the terrain the scene files hold (CityJSON `TINRelief`, `--no-terrain`); the
+    /// `terrain` files are read all the same.
+    pub no_terrain: bool,
 }
 
 /// The tallest height a reader accepts, metres: the tallest building stands 828 m. A larger
@@ -116,6 +125,8 @@ impl Default for ReadOptions {
             min_height_attr: Some("min_height".into()),
             min_levels_attr: Some("building:min_level".into()),
             crs: None,
+            terrain: Vec::new(),
+            no_terrain: false,
         }
     }
 }
@@ -303,6 +314,9 @@ pub struct FileRead {
     pub lods: std::collections::BTreeSet<String>,
     /// The CRS the file states ([`crs`]); `None` when it states none.
     pub crs: Option<Crs>,
+    /// CityJSON: the triangles of its `TINRelief` objects (world), unless
+    /// [`ReadOptions::no_terrain`].
+    pub terrain: Vec<[DVec3; 3]>,
 }
 
 /// An axis-aligned box.
@@ -523,6 +537,8 @@ pub struct Scene {
     pub report: SceneReport,
     /// The CRS of the world coordinates ([`Scene::crs`]).
     pub crs: Option<Crs>,
+    /// The terrain, local frame, with its blockers ([`terrain`]); `None` without one.
+    pub terrain: Option<Terrain>,
 }
 
 impl Scene {
@@ -533,6 +549,12 @@ impl Scene {
     /// `EPSG:N` when the code is known.
     pub fn crs(&self) -> Option<&Crs> {
         self.crs.as_ref()
+    }
+
+    /// The terrain's blockers (none without a terrain): square columns of solid ground, object
+    /// [`TERRAIN_OBJECT`]. The bake uses them after [`Scene::blockers`].
+    pub fn terrain_blockers(&self) -> &[Blocker] {
+        self.terrain.as_ref().map_or(&[], |t| &t.blockers)
     }
 
     /// Local bounding box of all objects.

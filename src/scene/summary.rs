@@ -11,6 +11,32 @@ use serde::Serialize;
 
 use super::{Location, Scene, Shape};
 
+/// One terrain source: path, format, triangles kept, DEM pixel size (m), DEM pixels with no
+/// data near the scene.
+pub type TerrainSourceRow = (String, String, usize, Option<(f64, f64)>, usize);
+
+/// What `vocc info` says of a terrain.
+#[derive(Clone, Debug, Serialize)]
+pub struct TerrainSummary {
+    /// Per source: path, format, triangles kept, DEM pixel size (m), DEM pixels with no data
+    /// near the scene.
+    pub sources: Vec<TerrainSourceRow>,
+    pub triangles: usize,
+    /// Local extent of the terrain kept (within `TERRAIN_MARGIN_M` of the objects).
+    pub extent_min: [f64; 2],
+    pub extent_max: [f64; 2],
+    /// Resolution: a typical triangle's side, metres.
+    pub resolution: f64,
+    /// Height range, metres (local).
+    pub z_min: f64,
+    pub z_max: f64,
+    /// Share of the objects' xy extent the terrain covers (sampled on 64 x 64 points).
+    pub scene_covered: f64,
+    /// Terrain blockers (solid columns) and building blockers joined with the ground.
+    pub blockers: usize,
+    pub joined: usize,
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
     pub files: Vec<FileSummary>,
@@ -58,6 +84,8 @@ pub struct Summary {
     pub skipped: Vec<Entry>,
     pub repaired: Vec<Entry>,
     pub no_blocker: Vec<Entry>,
+    /// The terrain, when the scene has one.
+    pub terrain: Option<TerrainSummary>,
     /// Seconds per stage.
     pub timings: Vec<(String, f64)>,
 }
@@ -259,6 +287,30 @@ pub fn summarize(scene: &Scene) -> Summary {
         skipped,
         repaired,
         no_blocker,
+        terrain: scene.terrain.as_ref().map(|t| TerrainSummary {
+            sources: t
+                .sources
+                .iter()
+                .map(|s| {
+                    (
+                        s.path.display().to_string(),
+                        s.format.to_string(),
+                        s.triangles,
+                        s.pixel,
+                        s.nodata,
+                    )
+                })
+                .collect(),
+            triangles: t.triangles.len(),
+            extent_min: t.lo.to_array(),
+            extent_max: t.hi.to_array(),
+            resolution: t.resolution(),
+            z_min: t.zmin,
+            z_max: t.zmax,
+            scene_covered: t.coverage(ext.min.truncate(), ext.max.truncate()),
+            blockers: t.blockers.len(),
+            joined: t.joined,
+        }),
         timings: scene
             .report
             .timings

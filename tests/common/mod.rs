@@ -140,9 +140,9 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
             DVec2::new(r[2], r[3]),
             DVec2::new(r[0], r[3]),
         ];
-        let view = f.cell_view(id, rec.ground()).unwrap();
+        let view = f.cell_view(id, rec.stand()).unwrap();
         for q in rec.vos() {
-            let vo = f.dequantize(id, rec.ground(), q).unwrap();
+            let vo = f.dequantize(id, rec.stand(), q).unwrap();
             let (a, b) = (DVec2::from(vo.a), DVec2::from(vo.b));
             assert!(vo.h >= view.e1 && vo.g <= view.e0);
             // Rule 2, with the brief's bound and lambda <= 1 (ARCHITECTURE.md).
@@ -154,8 +154,10 @@ pub fn check_stored_vos(s: &Scene, store: &vocc::runtime::format::Store) -> (usi
             // Rule 2 for a VO at least `dn` from the cell (`dn <= d_near` only raises the
             // bound, so these blockers support the VO too).
             let used_for = |dn: f64, beside: bool| -> Vec<Vec<DVec2>> {
+                // The objects' blockers and the terrain's (solid ground).
                 s.blockers
                     .iter()
+                    .chain(s.terrain_blockers())
                     .filter(|bl| {
                         let (bl_lo, bl_hi) = bl
                             .polygon

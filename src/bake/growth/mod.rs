@@ -176,7 +176,7 @@ pub(super) fn growth_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) 
         let mut first = true;
         for level in (1..=k).rev().take(LEVEL_FALLBACKS) {
             let mut checks = 0;
-            let r = quantize(f, id, ground, level, a, b, |qa, qb| {
+            let r = quantize(f, id, ground.level, level, a, b, |qa, qb| {
                 checks += 1;
                 all_checks += 1;
                 let h = f.vo_top(e1, level);

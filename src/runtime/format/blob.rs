@@ -58,12 +58,12 @@ pub fn decode_blob(frame: &Frame, bytes: &[u8]) -> Result<(CellId, CellRecord), 
     let version = Version::of(major).ok_or(FormatError::UnsupportedVersion { major })?;
     let id = r.u32().ok_or(short.clone())?;
     let value = r.u8().ok_or(short)?;
-    let n = count_of(value).ok_or(FormatError::BadIndexByte {
+    let ground_byte = frame.per_cell_ground();
+    let n = count_of(value, version, ground_byte).ok_or(FormatError::BadIndexByte {
         cell: id,
         value,
         offset: BLOB_COUNT_OFFSET,
     })?;
-    let ground_byte = frame.per_cell_ground();
     let size = record_size(n, ground_byte, version);
     let expected = BLOB_MIN_LEN as u64 + size;
     exact_length(expected, got)?;

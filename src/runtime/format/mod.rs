@@ -38,7 +38,7 @@ pub mod store;
 
 pub use blob::{decode_blob, encode_blob};
 pub use frame::{decode_frame, encode_frame, validate_frame};
-pub use records::{CellRecord, VoList};
+pub use records::{CellGround, CellRecord, VoList};
 pub use store::{encode_store, encode_store_with, SceneSection, Store};
 
 /// Length of an encoded [`Frame`].
@@ -51,8 +51,11 @@ pub const BLOB_MAGIC: [u8; 4] = *b"VOCB";
 pub const MAJOR: u16 = 2;
 /// The older major version this module still reads (FORMAT.md section 12).
 pub const MAJOR_V1: u16 = 1;
-/// The minor version this module writes (it reads every minor of both majors).
+/// The minor version this module writes for a store without deep VOs (it reads every minor of
+/// both majors).
 pub const MINOR: u16 = 0;
+/// The minor version of a store that holds a deep VO (bit 47, FORMAT.md 3.1): 2.1.
+pub const MINOR_DEEP: u16 = 1;
 /// Length of a store file's header.
 pub const HEADER_LEN: usize = 136;
 /// Length of the fixed part of a 2.0 store's scene section (`objects`, `scene`, `crs_len`),
@@ -183,6 +186,14 @@ pub enum FormatError {
     GroundNotStored { cell: CellId, ground: u8 },
     #[error("payload of {len} bytes does not fit the u32 payload_len")]
     PayloadTooLarge { len: u64 },
+    /// 2.1: a cell's rise byte (at `offset`) is 0, or puts its top eye above ground level 255.
+    #[error("cell {cell}'s rise {rise} at offset {offset} is 0 or takes its ground level {ground} past 255")]
+    BadRise {
+        cell: CellId,
+        ground: u8,
+        rise: u8,
+        offset: u64,
+    },
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -269,6 +280,7 @@ mod test_util {
             a: QPoint::fine(x1, y1),
             b: QPoint::fine(x2, y2),
             level,
+            deep: false,
         }
     }
 }

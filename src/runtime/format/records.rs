@@ -13,6 +13,7 @@ use std::fmt;
 use std::ops::Deref;
 
 use super::{FormatError, Reader, Version, SKIPPED, VO_BYTES, VO_BYTES_V1};
+pub use crate::runtime::frame::CellGround;
 use crate::runtime::frame::{QPoint, QVo, MAX_VOS_PER_CELL};
 use crate::runtime::grid::CellId;
 
@@ -20,6 +21,7 @@ const NO_VO: QVo = QVo {
     a: QPoint::fine(0, 0),
     b: QPoint::fine(0, 0),
     level: 0,
+    deep: false,
 };
 
 /// At most [`MAX_VOS_PER_CELL`] VOs, inline (no heap). Dereferences to `&[QVo]`.
@@ -99,14 +101,20 @@ pub enum CellRecord {
     /// The cell lies inside a building: no VOs, no ground (index value 255).
     Skipped,
     /// The cell's ground level (0 when the frame's ground is flat, and for a cell without VOs,
-    /// whose ground is not stored) and its VOs, most effective first.
-    Vos { ground: u8, vos: VoList },
+    /// whose ground is not stored), its rise (format 2.1: the cell's top eye stands `rise`
+    /// ground steps higher, a camera on a slope; 0 in 2.0) and its VOs, most effective first.
+    Vos { ground: u8, rise: u8, vos: VoList },
 }
+
+/// Index values `RISE_BASE + n` (`n` in `1..=10`) announce `n` VOs after a ground byte and a
+/// rise byte (format 2.1).
+pub const RISE_BASE: u8 = 10;
 
 impl CellRecord {
     /// A cell without VOs.
     pub const EMPTY: CellRecord = CellRecord::Vos {
         ground: 0,
+        rise: 0,
         vos: VoList::new(),
     };
 
@@ -114,8 +122,33 @@ impl CellRecord {
     pub fn new(ground: u8, vos: &[QVo]) -> Result<CellRecord, FormatError> {
         Ok(CellRecord::Vos {
             ground,
+            rise: 0,
             vos: VoList::from_slice(vos)?,
         })
+    }
+
+    /// The same record with its top eye `rise` ground steps higher (format 2.1).
+    pub fn with_rise(self, rise: u8) -> CellRecord {
+        match self {
+            CellRecord::Vos { ground, vos, .. } => CellRecord::Vos { ground, rise, vos },
+            s => s,
+        }
+    }
+
+    /// The rise (0 for a skipped cell, and in 2.0).
+    pub fn rise(&self) -> u8 {
+        match self {
+            CellRecord::Skipped => 0,
+            CellRecord::Vos { rise, .. } => *rise,
+        }
+    }
+
+    /// Where the cell stands: its ground level and rise.
+    pub fn stand(&self) -> CellGround {
+        CellGround {
+            level: self.ground(),
+            rise: self.rise(),
+        }
     }
 
     /// The VOs (none for a skipped cell).
@@ -138,70 +171,101 @@ impl CellRecord {
     pub fn index_byte(&self) -> u8 {
         match self {
             CellRecord::Skipped => SKIPPED,
+            CellRecord::Vos { vos, rise, .. } if *rise > 0 && !vos.is_empty() => {
+                RISE_BASE + vos.len() as u8
+            }
             CellRecord::Vos { vos, .. } => vos.len() as u8,
         }
     }
 }
 
-/// VOs a valid index value announces (`None` for a reserved value).
-pub(super) fn count_of(value: u8) -> Option<u8> {
+/// The record a valid index value announces, as the value itself (`0` for none, `1..=10` VOs,
+/// and in 2.1, with a ground byte, `11..=20`: `value - 10` VOs after a rise byte); `None` for a
+/// value the store or blob cannot hold.
+pub(super) fn count_of(value: u8, version: Version, ground_byte: bool) -> Option<u8> {
     match value {
         SKIPPED => Some(0),
         v if v as usize <= MAX_VOS_PER_CELL => Some(v),
+        v if version == Version::V2
+            && ground_byte
+            && v > RISE_BASE
+            && (v - RISE_BASE) as usize <= MAX_VOS_PER_CELL =>
+        {
+            Some(v)
+        }
         _ => None,
     }
 }
 
-/// Payload bytes of a cell with `n` VOs in a store or blob of `version`.
-pub(super) fn record_size(n: u8, ground_byte: bool, version: Version) -> u64 {
-    if n == 0 {
-        0
+/// VOs and whether a rise byte is stored, for a value [`count_of`] gave.
+fn split(v: u8) -> (u8, bool) {
+    if v > RISE_BASE {
+        (v - RISE_BASE, true)
     } else {
-        n as u64 * version.vo_bytes() as u64 + ground_byte as u64
+        (v, false)
     }
 }
 
-/// Decodes one record of `n >= 1` VOs of `version` from exactly its bytes; `offset` is where
-/// `bytes` starts in the file or blob (for errors).
+/// Payload bytes of a cell whose [`count_of`] is `v` in a store or blob of `version`.
+pub(super) fn record_size(v: u8, ground_byte: bool, version: Version) -> u64 {
+    let (n, rise) = split(v);
+    if n == 0 {
+        0
+    } else {
+        n as u64 * version.vo_bytes() as u64 + ground_byte as u64 + rise as u64
+    }
+}
+
+/// Decodes one record whose [`count_of`] is `v` (at least one VO) of `version` from exactly its
+/// bytes; `offset` is where `bytes` starts in the file or blob (for errors).
 pub(super) fn read_record(
     cell: CellId,
-    n: u8,
+    v: u8,
     ground_byte: bool,
     version: Version,
     bytes: &[u8],
     offset: u64,
 ) -> Result<CellRecord, FormatError> {
     let short = || FormatError::Truncated {
-        needed: offset + record_size(n, ground_byte, version),
+        needed: offset + record_size(v, ground_byte, version),
         got: offset + bytes.len() as u64,
     };
+    let (n, has_rise) = split(v);
     let mut r = Reader::new(bytes);
     let ground = if ground_byte {
         r.u8().ok_or_else(short)?
     } else {
         0
     };
+    let rise = if has_rise {
+        r.u8().ok_or_else(short)?
+    } else {
+        0
+    };
+    // S22/B14 (2.1): a rise byte of 0, or a top eye above ground level 255.
+    if has_rise && (rise == 0 || ground as u16 + rise as u16 > 255) {
+        return Err(FormatError::BadRise {
+            cell,
+            ground,
+            rise,
+            offset: offset + 1,
+        });
+    }
     let mut vos = VoList::new();
     for k in 0..n {
-        let at = offset + ground_byte as u64 + k as u64 * version.vo_bytes() as u64;
+        let at =
+            offset + ground_byte as u64 + has_rise as u64 + k as u64 * version.vo_bytes() as u64;
         let q = match version {
             Version::V1 => QVo::from_bytes_v1(r.take::<VO_BYTES_V1>().ok_or_else(short)?),
             Version::V2 => {
-                let b = r.take::<VO_BYTES>().ok_or_else(short)?;
-                if QVo::reserved_bit(b) {
-                    return Err(FormatError::ReservedVoBit {
-                        cell,
-                        vo: k,
-                        offset: at,
-                    });
-                }
-                QVo::from_bytes(b)
+                // Bit 47 is the deep flag of 2.1 (FORMAT.md 3.1), read by this decoder.
+                QVo::from_bytes(r.take::<VO_BYTES>().ok_or_else(short)?)
             }
         };
         check_vo(cell, k, &q, at)?;
         vos.push(q)?;
     }
-    Ok(CellRecord::Vos { ground, vos })
+    Ok(CellRecord::Vos { ground, rise, vos })
 }
 
 /// The checks both a decoder and the encoder make of a VO whose fields are in range: its
@@ -230,15 +294,24 @@ pub(super) fn check_record(
     ground_byte: bool,
     offset: u64,
 ) -> Result<u64, FormatError> {
-    let CellRecord::Vos { ground, vos } = rec else {
+    let CellRecord::Vos { ground, rise, vos } = rec else {
         return Ok(0);
     };
-    if *ground != 0 && (vos.is_empty() || !ground_byte) {
+    if (*ground != 0 || *rise != 0) && (vos.is_empty() || !ground_byte) {
         return Err(FormatError::GroundNotStored {
             cell,
             ground: *ground,
         });
     }
+    if *ground as u16 + *rise as u16 > 255 {
+        return Err(FormatError::BadRise {
+            cell,
+            ground: *ground,
+            rise: *rise,
+            offset: offset + 1,
+        });
+    }
+    let has_rise = *rise > 0;
     for (k, q) in vos.iter().enumerate() {
         let k8 = k as u8;
         if !q.in_range() {
@@ -248,18 +321,21 @@ pub(super) fn check_record(
             cell,
             k8,
             q,
-            offset + ground_byte as u64 + (k * VO_BYTES) as u64,
+            offset + ground_byte as u64 + has_rise as u64 + (k * VO_BYTES) as u64,
         )?;
     }
-    Ok(record_size(vos.len() as u8, ground_byte, Version::V2))
+    Ok(record_size(rec.index_byte(), ground_byte, Version::V2))
 }
 
 /// Appends a record checked by [`check_record`], in 2.0 (6-byte VOs).
 pub(super) fn push_record(out: &mut Vec<u8>, rec: &CellRecord, ground_byte: bool) {
-    if let CellRecord::Vos { ground, vos } = rec {
+    if let CellRecord::Vos { ground, rise, vos } = rec {
         if !vos.is_empty() {
             if ground_byte {
                 out.push(*ground);
+            }
+            if *rise > 0 {
+                out.push(*rise);
             }
             for q in vos.iter() {
                 out.extend_from_slice(&q.to_bytes());

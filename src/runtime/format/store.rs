@@ -12,7 +12,7 @@ use super::frame::{push_frame, read_frame, validate_frame, validate_frame_of};
 use super::records::{check_record, count_of, push_record, read_record, record_size, CellRecord};
 use super::{
     exact_length, u32_at, FormatError, Reader, Version, CELLS_PER_BLOCK, CRC_OFFSET, FRAME_LEN,
-    HEADER_LEN, MAJOR, MAX_CRS_LEN, MINOR, SCENE_FIXED_LEN, SKIPPED, STORE_MAGIC,
+    HEADER_LEN, MAJOR, MAX_CRS_LEN, MINOR, MINOR_DEEP, SCENE_FIXED_LEN, SKIPPED, STORE_MAGIC,
 };
 use crate::runtime::crc::{crc32, Crc32};
 use crate::runtime::frame::Frame;
@@ -185,7 +185,7 @@ impl<'a> Store<'a> {
     /// S10: every index value is a count or [`SKIPPED`].
     fn check_index(&self) -> Result<(), FormatError> {
         for (i, &value) in self.index.iter().enumerate() {
-            if count_of(value).is_none() {
+            if count_of(value, self.version, self.ground_byte).is_none() {
                 return Err(FormatError::BadIndexByte {
                     cell: i as CellId,
                     value,
@@ -198,7 +198,11 @@ impl<'a> Store<'a> {
 
     /// Payload bytes of a cell with index value `value` (valid).
     fn size_of(&self, value: u8) -> u64 {
-        record_size(count_of(value).unwrap_or(0), self.ground_byte, self.version)
+        record_size(
+            count_of(value, self.version, self.ground_byte).unwrap_or(0),
+            self.ground_byte,
+            self.version,
+        )
     }
 
     /// Where the block table would end had it all its bytes (for a truncation error that
@@ -242,7 +246,7 @@ impl<'a> Store<'a> {
     fn check_vos(&self) -> Result<(), FormatError> {
         let mut off: u64 = 0;
         for (i, &value) in self.index.iter().enumerate() {
-            let n = count_of(value).unwrap_or(0);
+            let n = count_of(value, self.version, self.ground_byte).unwrap_or(0);
             if n > 0 {
                 self.record_at(i as CellId, n, off)?;
             }
@@ -325,11 +329,12 @@ impl<'a> Store<'a> {
             cells: self.cells as u64,
         };
         let value = *self.index.get(id as usize).ok_or(out)?;
-        let n = count_of(value).ok_or(FormatError::BadIndexByte {
-            cell: id,
-            value,
-            offset: self.index_offset + id as u64,
-        })?;
+        let n =
+            count_of(value, self.version, self.ground_byte).ok_or(FormatError::BadIndexByte {
+                cell: id,
+                value,
+                offset: self.index_offset + id as u64,
+            })?;
         if value == SKIPPED {
             return Ok(CellRecord::Skipped);
         }
@@ -398,7 +403,11 @@ pub fn encode_store_with(
     let mut out = Vec::with_capacity((payload_offset + payload_len) as usize);
     out.extend_from_slice(&STORE_MAGIC);
     out.extend_from_slice(&MAJOR.to_le_bytes());
-    out.extend_from_slice(&MINOR.to_le_bytes());
+    // The lowest minor whose additions the file uses (FORMAT.md 2.4): 2.1 with a deep VO.
+    let deep = cells
+        .iter()
+        .any(|r| r.rise() > 0 || r.vos().iter().any(|q| q.deep));
+    out.extend_from_slice(&if deep { MINOR_DEEP } else { MINOR }.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
     push_frame(&mut out, frame);
     out.extend_from_slice(&payload_len32.to_le_bytes());
