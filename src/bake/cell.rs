@@ -29,7 +29,16 @@ pub fn usable(cell: &[DVec2], set: &BlockerSet, search_m: f64) -> Vec<u32> {
     let r = DVec2::splat(search_m);
     let mut near: Vec<u32> = set
         .in_box(lo - r, hi + r)
-        .filter(|&id| convex_interiors_disjoint(&set.polys[id as usize], cell))
+        .filter(|&id| {
+            // A blocker whose box misses the cell's is apart from it (the exact test decides
+            // the others).
+            let (blo, bhi) = bounds(&set.polys[id as usize]);
+            bhi.x < lo.x
+                || blo.x > hi.x
+                || bhi.y < lo.y
+                || blo.y > hi.y
+                || convex_interiors_disjoint(&set.polys[id as usize], cell)
+        })
         .collect();
     near.sort_unstable();
     near
@@ -90,6 +99,23 @@ impl CellSetup {
         } else {
             f.ground_z(ground.level)
         };
+        CellSetup::of_region(plan, id, cell, ground, view, g, plan.params.search_m)
+    }
+
+    /// The setup of any rectangle `cell` (counter-clockwise corners) with eyes `view` standing
+    /// on `ground`, its VOs' bottom at `g`, whose VOs' blockers lie within `search_m`: a
+    /// cell's, or a block of cells' for the far field ([`super::far`]), then named `id`.
+    #[allow(clippy::result_large_err)]
+    pub(super) fn of_region(
+        plan: &Plan,
+        id: CellId,
+        cell: [DVec2; 4],
+        ground: CellGround,
+        view: CellView,
+        g: f64,
+        search_m: f64,
+    ) -> Result<CellSetup, CellRecord> {
+        let f = &plan.frame;
         let (e0, e1) = (view.e0, view.e1);
         // A cell wholly inside one blocker that stands above the eyes holds no eye.
         let inside = plan.set.in_box(cell[0], cell[2]).any(|i| {
@@ -105,7 +131,7 @@ impl CellSetup {
         }
         // Blockers that may support a VO: near, apart from the cell, standing from below the
         // lowest eye (rule 2: base <= e0 - lambda (e0 - g)) to above the eyes.
-        let near: Vec<u32> = usable(&cell, &plan.set, plan.params.search_m)
+        let near: Vec<u32> = usable(&cell, &plan.set, search_m)
             .into_iter()
             .filter(|&i| plan.base[i as usize] <= e0 && plan.top[i as usize] > e1)
             .collect();
@@ -165,7 +191,7 @@ impl CellSetup {
         let mut all = super::spans::Spans::new();
         for q in &vos {
             if let Some(geom) = f.dequantize(id, ground, q) {
-                all = all.union(&plan.occludees.hidden(view, &geom, plan.reach()));
+                all = all.union(&plan.occludees.hidden(view, &geom, plan.params.weigh_m));
             }
         }
         stats.hidden_cost = plan.occludees.cost_of(&all);

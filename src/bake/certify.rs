@@ -22,6 +22,7 @@
 
 use glam::DVec2;
 
+use super::far::FarPiece;
 use super::quantize::{quantize, Refused};
 use super::slice::{d_near, line_lambda, point_segment_distance, Support};
 use crate::geom::predicates::point_in_umbra;
@@ -209,7 +210,9 @@ impl<'a> Certifier<'a> {
         let f = self.frame;
         stats.stores += 1;
         // Quantization moves an end by at most a grid diagonal.
-        let margin = 2.0 * f.quantum;
+        let margin = 2.0
+            * super::quantize::step_at(f, self.id, piece.a)
+                .max(super::quantize::step_at(f, self.id, piece.b));
         let band = self.band(piece.a, piece.b, margin);
         let floor = band_floor(band);
         let in_band = |qa: DVec2, qb: DVec2| d_near(self.cell, &[qa, qb]) >= floor;
@@ -311,6 +314,52 @@ impl<'a> Certifier<'a> {
             }
         }
         None
+    }
+}
+
+impl Certifier<'_> {
+    /// The highest level of this cell whose VO top stands no higher than the far piece's
+    /// (at least 1: above the eyes), or `None` when even level 1 is taller.
+    /// `None` too for a cell whose VOs stand lower than the piece (a deep cell's).
+    pub fn far_level(&self, p: &FarPiece) -> Option<u8> {
+        let (_, e1, g) = self.heights;
+        if g < p.bottom {
+            return None;
+        }
+        (1..HEIGHT_LEVELS)
+            .rev()
+            .find(|&l| self.frame.vo_top(e1, l) <= p.top)
+    }
+
+    /// A far piece (certified hidden from the cell's whole block, with its eyes, bottom and top,
+    /// [`super::far`]) quantized for this cell: at [`Self::far_level`] (a top no higher than the
+    /// piece's, above the cell's eyes, on the cell's ground, which is no lower than the block's:
+    /// a part of the certified quad), and each quantized candidate kept only when both its ends
+    /// lie in the closed umbra of the piece seen from the cell (exact). The piece is hidden from
+    /// every eye of the block, so from the cell's; every segment from the cell to a point of its
+    /// umbra crosses the piece; and a ray crosses the piece's blockers at a smaller fraction of
+    /// its length than on its way to the piece, so rule 2 still holds (module header). No raise:
+    /// the piece's blockers may lie beyond the cell's own.
+    pub fn store_far(&self, p: &FarPiece, stats: &mut CertifyStats) -> Option<Certified> {
+        let f = self.frame;
+        stats.stores += 1;
+        let level = self.far_level(p)?;
+        let mut checks = 0;
+        let r = quantize(f, self.id, self.ground.level, level, p.a, p.b, |qa, qb| {
+            checks += 1;
+            point_in_umbra(self.cell, p.a, p.b, qa) && point_in_umbra(self.cell, p.a, p.b, qb)
+        });
+        stats.checks += checks;
+        let q = r.ok()?;
+        stats.stored += 1;
+        if checks > 1 {
+            stats.shrunk += 1;
+        }
+        Some(Certified {
+            q,
+            geom: f.dequantize(self.id, self.ground, &q)?,
+            piece: (p.a, p.b),
+        })
     }
 }
 

@@ -31,15 +31,16 @@ use super::propose::ProposeParams;
 use super::select::{select, Candidate, Stage};
 use super::spans::Spans;
 use crate::geom::verify::BlockerIndex;
-use crate::runtime::frame::{CellView, VoGeom};
+use crate::runtime::frame::{CellGround, CellView, VoGeom};
 use crate::runtime::grid::CellId;
 
-/// A segment certified hidden from a whole block, standing from the block's ground up to `top`
-/// (metres, local frame).
+/// A segment certified hidden from a whole block, standing from `bottom` (the block's lowest
+/// ground) up to `top` (metres, local frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FarPiece {
     pub a: DVec2,
     pub b: DVec2,
+    pub bottom: f64,
     pub top: f64,
 }
 
@@ -87,21 +88,31 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
     let far = &plan.params.far;
     let bl = plan.blocks;
     let g = &plan.frame.grid;
-    let (bi, bj) = ((block % bl.nx as usize) as u32, (block / bl.nx as usize) as u32);
+    let (bi, bj) = (
+        (block % bl.nx as usize) as u32,
+        (block / bl.nx as usize) as u32,
+    );
     let (i0, j0) = (bi * bl.side, bj * bl.side);
     let (i1, j1) = ((i0 + bl.side).min(g.nx), (j0 + bl.side).min(g.ny));
     if i0 >= i1 || j0 >= j1 {
         return Vec::new();
     }
-    // The block's ground: the lowest and highest of its cells' grounds.
+    // The block's ground: the lowest of its cells' grounds, and the highest of their eyes'.
     let mut lo = u8::MAX;
     let mut hi = 0u8;
     for j in j0..j1 {
         for i in i0..i1 {
-            let l = plan.ground_level(j * g.nx + i);
-            lo = lo.min(l);
-            hi = hi.max(l);
+            let id = j * g.nx + i;
+            if !plan.eyes_fit(id) {
+                continue;
+            }
+            let s = plan.stand(id);
+            lo = lo.min(s.level);
+            hi = hi.max(s.level.saturating_add(s.rise));
         }
+    }
+    if lo > hi {
+        return Vec::new();
     }
     let f = &plan.frame;
     let rect = [
@@ -123,7 +134,13 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
     };
     // Named by its first cell, which it is not: the block is never quantized.
     let first: CellId = j0 * g.nx + i0;
-    let Ok(setup) = CellSetup::of_region(plan, first, poly, lo, view, far.reach_m) else {
+    let ground = CellGround {
+        level: lo,
+        rise: hi - lo,
+    };
+    let bottom = f.ground_z(lo);
+    let Ok(setup) = CellSetup::of_region(plan, first, poly, ground, view, bottom, far.reach_m)
+    else {
         return Vec::new();
     };
     let half = far.reach_m + 0.5 * (rect[2] - rect[0]).max(rect[3] - rect[1]);
@@ -201,6 +218,7 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
         .map(|p| FarPiece {
             a: p.a,
             b: p.b,
+            bottom,
             top: top(p.level),
         })
         .collect()

@@ -19,18 +19,159 @@ use std::time::Instant;
 use glam::DVec2;
 
 use super::cell::CellSetup;
+use super::certify::{Certifier, CertifyStats, Piece};
+use super::hidden::MapParams;
 use super::plan::{CellStats, Plan};
+use super::propose::ProposeParams;
+use super::select::{select, Candidate, Stage};
 use super::spans::Spans;
+use crate::geom::verify::BlockerIndex;
 use crate::runtime::format::CellRecord;
-use crate::runtime::frame::{QVo, HEIGHT_LEVELS};
+use crate::runtime::frame::{QVo, VoGeom, HEIGHT_LEVELS};
 
 /// The long generator's VOs of one cell: per slice, the sampled hidden map, its long runs, exact
-/// rule-3 weights; greedy picks, each certified exactly when picked. Returns the cell's record.
+/// rule-3 weights; with them the far pieces of the cell's block ([`super::far`]); greedy picks,
+/// each certified exactly when picked. Returns the cell's record.
 pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) -> CellRecord {
     let f = &plan.frame;
+    let (g, e1, view) = (setup.g, setup.view.e1, setup.view);
+    let radius = plan.params.weigh_m;
+    let mut t = Instant::now();
+    let (cands, hidden) = proposals(
+        plan,
+        setup,
+        &plan.params.map,
+        &plan.params.propose,
+        &mut t,
+        stats,
+    );
+    stats.dense = cands.len();
+    let index = BlockerIndex::new(
+        setup
+            .near
+            .iter()
+            .map(|&i| plan.set.polys[i as usize].as_slice()),
+    );
+    let certifier = certifier(plan, setup, &index);
+    // The far field: pieces certified hidden from the cell's whole block.
+    let far = plan.far_pieces(setup.id);
+    let mut cs = CertifyStats::default();
+    #[derive(Clone)]
+    enum Vo {
+        Piece(Piece),
+        Far(usize),
+        Stored(QVo, VoGeom),
+    }
+    let geom = |level: u8, a: DVec2, b: DVec2| VoGeom {
+        a: a.to_array(),
+        b: b.to_array(),
+        g,
+        h: f.vo_top(e1, level),
+    };
+    let mut start: Vec<Candidate<Vo>> = cands
+        .iter()
+        .zip(hidden)
+        .map(|(&(level, a, b), hidden)| Candidate {
+            stage: Stage::Proposed,
+            value: Vo::Piece(Piece {
+                level,
+                a,
+                b,
+                used: Vec::new(),
+            }),
+            hidden,
+        })
+        .collect();
+    for (i, p) in far.iter().enumerate() {
+        let Some(level) = certifier.far_level(p) else {
+            continue;
+        };
+        let hidden = plan.occludees.hidden(&view, &geom(level, p.a, p.b), radius);
+        if !hidden.is_empty() {
+            start.push(Candidate {
+                stage: Stage::Certified,
+                value: Vo::Far(i),
+                hidden,
+            });
+        }
+    }
+    let picked = select(
+        start,
+        &plan.occludees.costs,
+        Spans::new(),
+        plan.params.max_vos,
+        plan.params.budget,
+        |c| match &c.value {
+            Vo::Piece(p) if c.stage == Stage::Proposed => certifier
+                .pieces(p.level, p.a, p.b, &mut cs)
+                .into_iter()
+                .map(|p| Candidate {
+                    stage: Stage::Certified,
+                    hidden: plan
+                        .occludees
+                        .hidden(&view, &geom(p.level, p.a, p.b), radius),
+                    value: Vo::Piece(p),
+                })
+                .collect(),
+            Vo::Piece(p) => certifier
+                .store(p, &mut cs)
+                .map(|s| Candidate {
+                    stage: Stage::Stored,
+                    value: Vo::Stored(s.q, geom(p.level, p.a, p.b)),
+                    hidden: plan.occludees.hidden(&view, &s.geom, radius),
+                })
+                .into_iter()
+                .collect(),
+            Vo::Far(i) => certifier
+                .store_far(&far[*i], &mut cs)
+                .map(|s| Candidate {
+                    stage: Stage::Stored,
+                    value: Vo::Stored(s.q, s.geom),
+                    hidden: plan.occludees.hidden(&view, &s.geom, radius),
+                })
+                .into_iter()
+                .collect(),
+            Vo::Stored(..) => Vec::new(),
+        },
+    );
+    let vos: Vec<(QVo, VoGeom)> = picked
+        .into_iter()
+        .filter_map(|v| match v {
+            Vo::Stored(q, g) => Some((q, g)),
+            _ => None,
+        })
+        .collect();
+    stats.stage_ms[3] += clock(&mut t);
+    stats.tried = cs.tried;
+    stats.raised = cs.raised;
+    stats.shrunk = cs.shrunk;
+    stats.dropped = cs.stores - cs.stored;
+    stats.checks = cs.checks;
+    stats.proposed_m = cs.proposed_m;
+    stats.certified_m = cs.certified_m;
+    setup.finish(plan, vos, stats)
+}
+
+/// Milliseconds since `t`, which restarts.
+fn clock(t: &mut Instant) -> f64 {
+    let e = t.elapsed().as_secs_f64() * 1e3;
+    *t = Instant::now();
+    e
+}
+
+/// The first stages of the long generator for a region's setup (a cell's, or a block's): per
+/// slice the hidden map and its long runs, each weighed by rule 3 from the region and trimmed
+/// to what its occludees need. Proposals `(level, a, b)` with what each hides, in a fixed order;
+/// stage times go to `stats` (maps, proposals, weights).
+pub(super) fn proposals(
+    plan: &Plan,
+    setup: &CellSetup,
+    map: &MapParams,
+    propose: &ProposeParams,
+    t: &mut Instant,
+    stats: &mut CellStats,
+) -> (Vec<(u8, DVec2, DVec2)>, Vec<Spans>) {
     let CellSetup {
-        id,
-        ground,
         view,
         g,
         ref cell,
@@ -39,16 +180,9 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
         ref levels,
         ..
     } = *setup;
-    let (e0, e1) = (view.e0, view.e1);
-    let radius = plan.reach();
+    let radius = plan.params.weigh_m;
     let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
     let mut hidden: Vec<Spans> = Vec::new();
-    let clock = |t: &mut Instant| {
-        let e = t.elapsed().as_secs_f64() * 1e3;
-        *t = Instant::now();
-        e
-    };
-    let mut t = Instant::now();
     let mut all_props: Vec<(u8, DVec2, DVec2)> = Vec::new();
     // Every slice's boundary edges, each edge once with the slices it belongs to: the maps
     // are built together (8 slices at a time), each edge's hit distances computed once for
@@ -66,19 +200,13 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
             })
             .collect();
         let (edges, member) = plan.twins.slice_edges(&plan.set.polys, &slices);
-        let maps = super::hidden::HiddenMap::build_slices(
-            cell,
-            &edges,
-            &member,
-            chunk.len(),
-            &plan.params.map,
-        );
-        stats.stage_ms[0] += clock(&mut t);
+        let maps = super::hidden::HiddenMap::build_slices(cell, &edges, &member, chunk.len(), map);
+        stats.stage_ms[0] += clock(t);
         for (&k, map) in chunk.iter().zip(&maps) {
-            let props = super::propose::runs(cell, map, &plan.params.propose);
+            let props = super::propose::runs(cell, map, propose);
             all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
         }
-        stats.stage_ms[1] += clock(&mut t);
+        stats.stage_ms[1] += clock(t);
     }
     // The same segment proposed at several levels: the highest (its map says hidden
     // there, and a taller VO hides at least as much).
@@ -128,100 +256,34 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
         cands.push((k, a, b));
         hidden.push(hid);
     }
-    stats.stage_ms[2] += clock(&mut t);
-    stats.dense = cands.len();
-    let index = crate::geom::verify::BlockerIndex::new(
-        near.iter().map(|&i| plan.set.polys[i as usize].as_slice()),
-    );
-    let certifier = super::certify::Certifier {
-        index: &index,
-        frame: f,
-        id,
-        ground,
-        cell,
-        heights: (e0, e1, g),
-        blockers: near
+    stats.stage_ms[2] += clock(t);
+    (cands, hidden)
+}
+
+/// The certification context of a region's setup: its blockers with their rule-2 support,
+/// indexed once in `index` for all its verifiers.
+pub(super) fn certifier<'a>(
+    plan: &'a Plan,
+    setup: &'a CellSetup,
+    index: &'a BlockerIndex<'a>,
+) -> Certifier<'a> {
+    Certifier {
+        index,
+        frame: &plan.frame,
+        id: setup.id,
+        ground: setup.ground,
+        cell: &setup.cell,
+        heights: (setup.view.e0, setup.view.e1, setup.g),
+        blockers: setup
+            .near
             .iter()
-            .zip(support)
+            .zip(&setup.support)
             .map(|(&i, s)| (plan.set.polys[i as usize].as_slice(), *s))
             .collect(),
         verifiers: (0..HEIGHT_LEVELS as usize * super::certify::BANDS)
             .map(|_| Default::default())
             .collect(),
-    };
-    let mut cs = super::certify::CertifyStats::default();
-    use super::certify::Piece;
-    use super::select::{select, Candidate, Stage};
-    #[derive(Clone)]
-    enum Vo {
-        Piece(Piece),
-        Stored(QVo, crate::runtime::frame::VoGeom),
     }
-    let geom = |level: u8, a: DVec2, b: DVec2| crate::runtime::frame::VoGeom {
-        a: a.to_array(),
-        b: b.to_array(),
-        g,
-        h: f.vo_top(e1, level),
-    };
-    let start: Vec<Candidate<Vo>> = cands
-        .iter()
-        .zip(hidden)
-        .map(|(&(level, a, b), hidden)| Candidate {
-            stage: Stage::Proposed,
-            value: Vo::Piece(Piece {
-                level,
-                a,
-                b,
-                used: Vec::new(),
-            }),
-            hidden,
-        })
-        .collect();
-    let picked = select(
-        start,
-        &plan.occludees.costs,
-        plan.params.max_vos,
-        plan.params.budget,
-        |c| match &c.value {
-            Vo::Piece(p) if c.stage == Stage::Proposed => certifier
-                .pieces(p.level, p.a, p.b, &mut cs)
-                .into_iter()
-                .map(|p| Candidate {
-                    stage: Stage::Certified,
-                    hidden: plan
-                        .occludees
-                        .hidden(&view, &geom(p.level, p.a, p.b), radius),
-                    value: Vo::Piece(p),
-                })
-                .collect(),
-            Vo::Piece(p) => certifier
-                .store(p, &mut cs)
-                .map(|s| Candidate {
-                    stage: Stage::Stored,
-                    value: Vo::Stored(s.q, geom(p.level, p.a, p.b)),
-                    hidden: plan.occludees.hidden(&view, &s.geom, radius),
-                })
-                .into_iter()
-                .collect(),
-            Vo::Stored(..) => Vec::new(),
-        },
-    );
-    let vos: Vec<(QVo, crate::runtime::frame::VoGeom)> = picked
-        .into_iter()
-        .filter_map(|v| match v {
-            Vo::Stored(q, g) => Some((q, g)),
-            Vo::Piece(_) => None,
-        })
-        .collect();
-    stats.stage_ms[3] += clock(&mut t);
-    stats.tried = cs.tried;
-    stats.raised = cs.raised;
-    stats.shrunk = cs.shrunk;
-    stats.dropped = cs.stores - cs.stored;
-    stats.checks = cs.checks;
-    stats.proposed_m = cs.proposed_m;
-    stats.certified_m = cs.certified_m;
-    setup.finish(plan, vos, stats)
 }
 
 /// Margin kept beyond the crossings [`trim`] finds, metres.

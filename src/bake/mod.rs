@@ -25,6 +25,7 @@
 pub mod budget;
 pub mod cell;
 pub mod certify;
+pub mod far;
 pub mod growth;
 pub mod hidden;
 pub mod incremental;

@@ -15,6 +15,12 @@ use crate::runtime::culler::BoxTree;
 use crate::runtime::frame::{CellView, VoGeom};
 use crate::runtime::occlusion::PreparedVo;
 
+/// Subtrees partly hidden by a VO that look smaller than this from the cell, radians, are
+/// passed over whole when a VO is weighed ([`BoxTree::hidden_runs`]): a subtree of buildings
+/// 2 km away on the edge of an umbra, 20 m across, weighs nothing rather than being walked box
+/// by box. It only lowers weights, and decides nothing.
+pub const WEIGH_MIN_ANGLE: f64 = 0.01;
+
 /// The occludees of a scene: boxes in the local frame, with costs, under the runtime's box
 /// hierarchy. Occludees are named by their position in the hierarchy (each subtree a
 /// contiguous range), so the hidden sets of rule 3 come out whole subtrees at a time.
@@ -24,6 +30,9 @@ pub struct Occludees {
     pub cost: Vec<u64>,
     /// The same costs as prefix sums.
     pub costs: Costs,
+    /// Subtrees partly hidden that look smaller than this from the cell, radians, are passed
+    /// over whole when weighing ([`BoxTree::hidden_runs`]): 0 weighs exactly.
+    pub min_angle: f64,
     tree: BoxTree,
 }
 
@@ -37,6 +46,7 @@ impl Occludees {
             boxes: by_pos.map(|i| boxes[i]).collect(),
             costs: Costs::new(&cost),
             cost,
+            min_angle: WEIGH_MIN_ANGLE,
             tree,
         }
     }
@@ -94,6 +104,7 @@ impl Occludees {
             &p,
             [cx - radius, cy - radius, cx + radius, cy + radius],
             &self.boxes,
+            self.min_angle,
             found,
         );
     }

@@ -58,9 +58,8 @@ pub struct BakeParams {
     pub grow: GrowParams,
     /// Which generator proposes the VOs.
     pub generator: Generator,
-    /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres (at
-    /// least: the weighing square is the reach, which also covers `search_m` past the cell).
-    /// Both generators.
+    /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres
+    /// ([`WEIGH_M`]). Both generators.
     pub weigh_m: f64,
     /// The sampled visibility of the cell's boundary: eyes per edge, angular bins, pixel side
     /// (metres) and raster half-side (metres). The long generator only (set by [`Effort`]).
@@ -72,7 +71,52 @@ pub struct BakeParams {
     /// Exact certifications the long generator's selection may run per cell, a count
     /// ([`super::select`]). The long generator only (set by [`Effort`]).
     pub budget: usize,
+    /// The far field: VOs sought once per block of cells, far beyond `search_m`, certified
+    /// hidden from the whole block and offered to each of its cells ([`super::far`]). The long
+    /// generator only (its budget set by [`Effort`]).
+    pub far: FarParams,
 }
+
+/// How the far field is sought ([`super::far`]): per block of cells, with the long generator's
+/// own stages at the block's scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FarParams {
+    /// Side of a block, metres: blocks are squares of whole cells, the nearest count per side
+    /// to this (at least 1). 0 turns the far field off.
+    pub block_m: f64,
+    /// How far around a block (per axis, past its sides) its VOs' blockers are taken from,
+    /// and its lines scanned, metres.
+    pub reach_m: f64,
+    /// Pixel side of the block's hidden maps, metres.
+    pub px: f64,
+    /// Spacing of the block's scan lines, metres, and the shortest run proposed.
+    pub spacing_m: f64,
+    pub min_len_m: f64,
+    /// Exact certifications per block, and the certified pieces kept for its cells (the
+    /// block's own greedy choice by what they hide from it).
+    pub budget: usize,
+    pub keep: usize,
+}
+
+impl Default for FarParams {
+    fn default() -> Self {
+        FarParams {
+            block_m: 400.0,
+            reach_m: 3000.0,
+            px: 12.0,
+            spacing_m: 64.0,
+            min_len_m: 120.0,
+            budget: 12,
+            keep: 12,
+        }
+    }
+}
+
+/// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres: far
+/// enough for the far field of a large city (its VOs hide objects kilometres behind them),
+/// and cheap, since a VO's hidden occludees are found whole subtrees at a time
+/// ([`super::spans`]).
+pub const WEIGH_M: f64 = 10_000.0;
 
 /// How hard the long generator looks, from fast to tight: how many eyes sample the cell's
 /// boundary, how many runs per direction are proposed, how many certifications a cell may run.
@@ -89,14 +133,15 @@ pub enum Effort {
 impl Effort {
     /// The parameters of this effort, over `p`.
     pub fn apply(self, p: &mut BakeParams) {
-        let (eyes, per_direction, budget) = match self {
-            Effort::Fast => (1, 1, 12),
-            Effort::Default => (3, 1, 25),
-            Effort::Tight => (7, 2, 60),
+        let (eyes, per_direction, budget, far) = match self {
+            Effort::Fast => (1, 1, 12, 6),
+            Effort::Default => (3, 1, 25, 12),
+            Effort::Tight => (7, 2, 60, 24),
         };
         p.map.edge_eyes = eyes;
         p.propose.per_direction = per_direction;
         p.budget = budget;
+        p.far.budget = far;
     }
 }
 
@@ -124,10 +169,11 @@ impl Default for BakeParams {
                 ..GrowParams::default()
             },
             generator: Generator::Long,
-            weigh_m: 1000.0,
+            weigh_m: WEIGH_M,
             map: super::hidden::MapParams::default(),
             propose: super::propose::ProposeParams::default(),
             budget: 0,
+            far: FarParams::default(),
         }
         .with_effort(Effort::Default)
     }

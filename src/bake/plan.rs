@@ -16,17 +16,19 @@
 //! cells; no cell gets more than [`MAX_VOS_PER_CELL`] VOs.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::DVec2;
 use rayon::prelude::*;
 
 use super::cell::CellSetup;
+use super::far::{Blocks, FarPiece};
 use super::occludees::Occludees;
 use super::params::{BakeParams, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
 use super::BlockerSet;
 use crate::runtime::format::{encode_store, CellRecord, FormatError};
-use crate::runtime::frame::{Frame, VoGeom, MAX_VOS_PER_CELL, QUANT_STEPS};
+use crate::runtime::frame::{Frame, VoGeom, HEIGHT_LEVELS, MAX_VOS_PER_CELL};
 use crate::runtime::grid::{CellId, GridDescriptor};
 use crate::scene::Scene;
 
@@ -135,6 +137,10 @@ pub struct Plan<'s> {
     pub occludees: Occludees,
     /// On a terrain, every cell's ground level and whether its eyes fit the frame.
     pub ground: Option<super::terrain::GroundTable>,
+    /// The blocks of cells the far field is sought for ([`super::far`]), and each block's far
+    /// pieces, found when a cell of it first asks.
+    pub blocks: Blocks,
+    far: Vec<OnceLock<Vec<FarPiece>>>,
 }
 
 fn pow2_at_least(x: f64) -> f64 {
@@ -209,7 +215,26 @@ impl<'s> Plan<'s> {
             Some(t) => (t.ground_z0, t.ground_step),
             None => (ground_z0, ground_step),
         };
-        let quantum = pow2_at_least((0.5 * size + params.search_m) / (QUANT_STEPS / 2) as f64);
+        let blocks = if params.generator == Generator::Long {
+            Blocks::new(nx as u32, ny as u32, size, params.far.block_m)
+        } else {
+            Blocks::new(nx as u32, ny as u32, size, 0.0)
+        };
+        let far_m = if blocks.side > 0 {
+            blocks.side as f64 * size + params.far.reach_m
+        } else {
+            0.0
+        };
+        // The largest exponent's grid (255 * 128 steps from the centre) reaches as far as a VO
+        // may stand from its cell: its own search, or its block's far field.
+        let quantum = pow2_at_least((0.5 * size + params.search_m).max(far_m) / (255.0 * 128.0));
+        // The highest level stands as tall above the lowest eye as the tallest building (not
+        // the terrain: a hill far off does not make every VO's levels coarse).
+        let tallest = scene.blockers.iter().fold(0.0f64, |m, b| m.max(b.top));
+        let rise = (tallest - (ground_z0 + e1)).max(4.0 * H0_M);
+        let h_ratio = (((rise / H0_M + 1.0).ln() / (HEIGHT_LEVELS - 1) as f64).exp() * 1024.0)
+            .ceil()
+            / 1024.0;
         let frame = Frame {
             origin: scene.origin.to_array(),
             grid,
@@ -219,7 +244,7 @@ impl<'s> Plan<'s> {
             ground_z0,
             ground_step,
             h0: H0_M,
-            h_ratio: H_RATIO,
+            h_ratio,
         };
         let set = BlockerSet::new(
             all().map(|b| b.polygon.clone()).collect(),
@@ -234,9 +259,25 @@ impl<'s> Plan<'s> {
             base,
             top,
             occludees: Occludees::from_scene(scene),
+            far: (0..blocks.count()).map(|_| OnceLock::new()).collect(),
+            blocks,
             params,
             ground,
         })
+    }
+
+    /// The far pieces of the block of cell `id` ([`super::far`]): sought when a cell of the
+    /// block first asks, the same whatever cell that is; none without blocks.
+    pub fn far_pieces(&self, id: CellId) -> &[FarPiece] {
+        let g = &self.frame.grid;
+        if self.blocks.side == 0 || g.nx == 0 || id as u64 >= g.cell_count() {
+            return &[];
+        }
+        let b = self.blocks.of(id % g.nx, id / g.nx);
+        match self.far.get(b) {
+            Some(slot) => slot.get_or_init(|| super::far::block_pieces(self, b)),
+            None => &[],
+        }
     }
 
     pub fn scene(&self) -> &'s Scene {
@@ -251,7 +292,17 @@ impl<'s> Plan<'s> {
     /// distance of the usable blockers past the cell, and the occludees weighed within this
     /// distance.
     pub fn reach(&self) -> f64 {
-        (self.params.search_m + self.frame.grid.cell_size).max(self.params.weigh_m)
+        let cell = self.frame.grid.cell_size;
+        // The far field: the block's blockers lie within `reach_m` of the block, which lies
+        // within its side of the cell's centre; its grounds, within the search of its cells.
+        let far = if self.blocks.side > 0 {
+            self.blocks.side as f64 * cell + self.params.far.reach_m.max(self.params.search_m)
+        } else {
+            0.0
+        };
+        (self.params.search_m + cell)
+            .max(self.params.weigh_m)
+            .max(far)
     }
 
     /// The cells to bake, ascending: those meeting the region and the walkable area, when

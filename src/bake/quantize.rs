@@ -14,8 +14,12 @@
 
 use glam::DVec2;
 
-use crate::runtime::frame::{Frame, QPoint, QVo, QUANT_STEPS};
+use crate::runtime::frame::{Frame, QPoint, QVo, EXPONENTS};
 use crate::runtime::grid::CellId;
+
+/// The least an end moves inward when the snapped segment fails, metres: the verifier finds
+/// where a hidden part ends to within 0.5 m (`certify::MIN_STEP_M`).
+pub const MIN_SHIFT_M: f64 = 1.0;
 
 /// Most `check` calls spent on one VO.
 pub const MAX_CHECKS: usize = 12;
@@ -29,8 +33,29 @@ pub enum Refused {
     NotHidden,
 }
 
+/// The exponent of the grid an endpoint at offset `d` from its cell's centre snaps to: the
+/// least whose mantissas reach it with a step to spare (`|d| <= 255 * step` per axis), or the
+/// largest.
+pub fn exponent(frame: &Frame, d: DVec2) -> u8 {
+    let m = d.x.abs().max(d.y.abs());
+    (0..EXPONENTS)
+        .find(|&e| m <= 255.0 * step(frame, e))
+        .unwrap_or(EXPONENTS - 1)
+}
+
+/// The grid step of exponent `e`, metres.
+pub fn step(frame: &Frame, e: u8) -> f64 {
+    frame.quantum * (1u32 << e) as f64
+}
+
+/// The grid step an endpoint at `p` snaps to in cell `id`, metres.
+pub fn step_at(frame: &Frame, id: CellId, p: DVec2) -> f64 {
+    let c = frame.cell_centre(id).map(DVec2::from).unwrap_or(p);
+    step(frame, exponent(frame, p - c))
+}
+
 /// Quantizes segment `a`–`b` of cell `id` at height `level`; `check(a, b)` decides the dequantized
-/// candidates. Returns the stored VO and how many checks it took.
+/// candidates. Returns the stored VO.
 pub fn quantize(
     frame: &Frame,
     id: CellId,
@@ -44,33 +69,42 @@ pub fn quantize(
         .cell_centre(id)
         .map(DVec2::from)
         .ok_or(Refused::OutsideWindow)?;
-    let q = frame.quantum;
     let (lo, hi) = window(frame, c);
     let (a, b) = clip(a, b, lo, hi).ok_or(Refused::OutsideWindow)?;
     let len = a.distance(b);
-    if len < 2.0 * q {
+    let (sa, sb) = (step_at(frame, id, a), step_at(frame, id, b));
+    if len < sa + sb {
         return Err(Refused::NotHidden);
     }
+    // Ends move inward by whole steps, at least [`MIN_SHIFT_M`].
+    let (ua, ub) = (sa.max(MIN_SHIFT_M), sb.max(MIN_SHIFT_M));
     let dir = (b - a) / len;
     // The far side of the VO's line, away from the cell centre.
     let mut far = dir.perp();
     if far.dot((a + b) * 0.5 - c) < 0.0 {
         far = -far;
     }
-    let index = |p: DVec2| -> (f64, f64) { ((p.x - lo.x) / q, (p.y - lo.y) / q) };
-    let around = |p: DVec2, line_pt: DVec2| -> Vec<(u16, u16)> {
-        let (fx, fy) = index(p);
-        let mut v = Vec::with_capacity(4);
-        for kx in [fx.floor(), fx.ceil()] {
-            for ky in [fy.floor(), fy.ceil()] {
-                if !(0.0..QUANT_STEPS as f64).contains(&kx)
-                    || !(0.0..QUANT_STEPS as f64).contains(&ky)
-                {
+    // The grid points around `p` (on its own exponent's grid, each in canonical form) that lie
+    // on the far side of the line through `p`.
+    let around = |p: DVec2| -> Vec<QPoint> {
+        let d = p - c;
+        let e = exponent(frame, d);
+        let s = step(frame, e);
+        let (fx, fy) = (d.x / s, d.y / s);
+        let mut v: Vec<QPoint> = Vec::with_capacity(4);
+        for kx in [crate::geom::floor(fx), crate::geom::ceil(fx)] {
+            for ky in [crate::geom::floor(fy), crate::geom::ceil(fy)] {
+                if !(-256.0..256.0).contains(&kx) || !(-256.0..256.0).contains(&ky) {
                     continue;
                 }
-                let g = lo + DVec2::new(kx, ky) * q;
-                if (g - line_pt).dot(far) >= 0.0 {
-                    let k = (kx as u16, ky as u16);
+                let g = c + DVec2::new(kx, ky) * s;
+                if (g - p).dot(far) >= 0.0 {
+                    let k = QPoint {
+                        e,
+                        x: (kx + 256.0) as u16,
+                        y: (ky + 256.0) as u16,
+                    }
+                    .canonical();
                     if !v.contains(&k) {
                         v.push(k);
                     }
@@ -80,19 +114,20 @@ pub fn quantize(
         v
     };
     let mut checks = 0;
-    let mut shift = 0.0;
-    while 2.0 * shift + 2.0 * q <= len && checks < MAX_CHECKS {
-        let (pa, pb) = (a + dir * shift, b - dir * shift);
-        let (ca, cb) = (around(pa, pa), around(pb, pb));
-        // (length in grid steps, grid point of a, grid point of b)
-        type Pair = (f64, (u16, u16), (u16, u16));
-        let mut pairs: Vec<Pair> = Vec::new();
+    // Ends moved inward by 0, 1, 2, 4, .. of their own steps.
+    let mut k = 0.0;
+    while k * (ua + ub) + sa + sb <= len && checks < MAX_CHECKS {
+        let (pa, pb) = (a + dir * (k * ua), b - dir * (k * ub));
+        let (ca, cb) = (around(pa), around(pb));
+        // (length, endpoint a, endpoint b)
+        let mut pairs: Vec<(f64, QPoint, QPoint)> = Vec::new();
         for &ka in &ca {
             for &kb in &cb {
-                if ka == kb {
+                if ka.steps() == kb.steps() {
                     continue;
                 }
-                let d = (ka.0 as f64 - kb.0 as f64).hypot(ka.1 as f64 - kb.1 as f64);
+                let (da, db) = (ka.steps(), kb.steps());
+                let d = ((da.0 - db.0) as f64).hypot((da.1 - db.1) as f64);
                 pairs.push((d, ka, kb));
             }
         }
@@ -102,8 +137,8 @@ pub fn quantize(
                 break;
             }
             let qvo = QVo {
-                a: QPoint::fine(ka.0, ka.1),
-                b: QPoint::fine(kb.0, kb.1),
+                a: ka,
+                b: kb,
                 level,
                 deep: false,
             };
@@ -115,18 +150,16 @@ pub fn quantize(
                 return Ok(qvo);
             }
         }
-        shift = if shift == 0.0 { q } else { 2.0 * shift };
+        k = if k == 0.0 { 1.0 } else { 2.0 * k };
     }
     Err(Refused::NotHidden)
 }
 
-/// The quantization window of the cell centred at `c`: the box of its grid points.
+/// The quantization window of the cell centred at `c`: the box the grid of the largest exponent
+/// covers.
 pub fn window(frame: &Frame, c: DVec2) -> (DVec2, DVec2) {
-    let half = (QUANT_STEPS / 2) as f64;
-    (
-        c - DVec2::splat(half * frame.quantum),
-        c + DVec2::splat((half - 1.0) * frame.quantum),
-    )
+    let s = step(frame, EXPONENTS - 1);
+    (c - DVec2::splat(256.0 * s), c + DVec2::splat(255.0 * s))
 }
 
 /// Liang–Barsky clip of segment `a`–`b` to the box `[lo, hi]`; `None` when nothing is left.
@@ -196,6 +229,42 @@ mod tests {
     }
 
     #[test]
+    fn precision_follows_distance() {
+        let f = Frame {
+            quantum: 0.25,
+            ..frame()
+        };
+        // Cell 0 is centred at (50, 50). A segment across the line y = 50 + d, for d from 60 m
+        // to 8 km: its stored ends lie on the grid of their own exponent, canonical, no further
+        // from where they were than a grid diagonal, and that grid's step is 1/256 to 1/128 of
+        // the end's distance (along the larger axis), or the finest.
+        for d in [60.0, 130.0, 700.0, 2_500.0, 8_000.0] {
+            // Long enough for a few grid steps at that distance.
+            let half = 30.2f64.max(0.25 * d);
+            let (a, b) = (
+                DVec2::new(50.3 - half, 50.0 + d),
+                DVec2::new(50.7 + half, 50.0 + d),
+            );
+            let q = quantize(&f, 0, 0, 3, a, b, |_, _| true).unwrap();
+            let g = f.dequantize(0, 0, &q).unwrap();
+            for (p, want) in [(q.a, a), (q.b, b)] {
+                assert!(p.is_canonical() && p.in_range(), "{d}: {p:?}");
+                let step = 0.25 * (1u32 << p.e) as f64;
+                let off = want - DVec2::new(50.0, 50.0);
+                let m = off.x.abs().max(off.y.abs());
+                assert!(
+                    step == 0.25 || (step * 128.0 <= m && m <= step * 256.0),
+                    "{d}: {p:?}"
+                );
+                let got = if p == q.a { g.a } else { g.b };
+                assert!(DVec2::from(got).distance(want) <= step * 2f64.sqrt() + 1e-9);
+                // On the far side of the line, away from the cell.
+                assert!(got[1] >= 50.0 + d, "{d}: {got:?}");
+            }
+        }
+    }
+
+    #[test]
     fn a_refusing_check_shrinks_then_drops() {
         let f = frame();
         let (a, b) = (DVec2::new(10.0, 150.0), DVec2::new(90.0, 150.0));
@@ -209,8 +278,8 @@ mod tests {
             quantize(&f, 0, 0, 1, a, b, |_, _| false),
             Err(Refused::NotHidden)
         );
-        // Far outside the window.
-        let far = DVec2::new(5000.0, 0.0);
+        // Far outside the window (256 * 2^7 steps of 2 m: 65.5 km).
+        let far = DVec2::new(70_000.0, 0.0);
         assert_eq!(
             quantize(&f, 0, 0, 1, far, far + DVec2::X * 10.0, |_, _| true),
             Err(Refused::OutsideWindow)

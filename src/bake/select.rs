@@ -68,6 +68,7 @@ impl PartialOrd for Entry {
 pub fn select<T>(
     candidates: Vec<Candidate<T>>,
     cost: &Costs,
+    mut covered: Spans,
     max_vos: usize,
     budget: usize,
     mut refine: impl FnMut(&Candidate<T>) -> Vec<Candidate<T>>,
@@ -88,8 +89,7 @@ pub fn select<T>(
     for c in candidates {
         push(c, &mut all, &mut heap);
     }
-    let mut covered = Spans::new();
-    let mut hidden_cost: u64 = 0;
+    let mut hidden_cost: u64 = cost.of(&covered);
     let mut out = Vec::new();
     let mut spent = 0;
     while out.len() < max_vos {
@@ -154,8 +154,14 @@ mod tests {
             stored(2, vec![5, 6]),
         ];
         let cost = Costs::new(&[10; 7]);
-        assert_eq!(select(c.clone(), &cost, 10, 100, |_| vec![]), vec![0, 2, 1]);
-        assert_eq!(select(c, &cost, 2, 100, |_| vec![]), vec![0, 2]);
+        assert_eq!(
+            select(c.clone(), &cost, Spans::new(), 10, 100, |_| vec![]),
+            vec![0, 2, 1]
+        );
+        assert_eq!(
+            select(c, &cost, Spans::new(), 2, 100, |_| vec![]),
+            vec![0, 2]
+        );
     }
 
     #[test]
@@ -171,7 +177,7 @@ mod tests {
         ];
         let cost = Costs::new(&[1; 4]);
         let mut refined = 0;
-        let picked = select(c, &cost, 10, 100, |p| {
+        let picked = select(c, &cost, Spans::new(), 10, 100, |p| {
             refined += 1;
             assert_eq!(p.value, 0);
             vec![stored(10, vec![0]), stored(11, vec![3])]
@@ -185,8 +191,14 @@ mod tests {
         let c = vec![stored(0, vec![0]), stored(1, vec![1])];
         // 1 more after 1000 is below MIN_GAIN_SHARE (0.2%); 5 more is above it.
         let cost = Costs::new(&[1000, 1]);
-        assert_eq!(select(c.clone(), &cost, 10, 100, |_| vec![]), vec![0]);
+        assert_eq!(
+            select(c.clone(), &cost, Spans::new(), 10, 100, |_| vec![]),
+            vec![0]
+        );
         let cost = Costs::new(&[1000, 5]);
-        assert_eq!(select(c, &cost, 10, 100, |_| vec![]), vec![0, 1]);
+        assert_eq!(
+            select(c, &cost, Spans::new(), 10, 100, |_| vec![]),
+            vec![0, 1]
+        );
     }
 }

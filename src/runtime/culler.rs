@@ -520,6 +520,12 @@ impl BoxTree {
     /// [`Self::id_at`]`(p)`): the leaves keep their grown form only ([`Lanes`]), and whether a
     /// box meets `within` is asked of the box itself.
     ///
+    /// A subtree that is only partly hidden and looks smaller than `min_angle` (its bounds' larger
+    /// side over their distance from the cell's centre, radians) is passed over whole: far away,
+    /// on the edge of an umbra, where a walk would otherwise visit box after box for little
+    /// weight. So the runs found are a subset of the hidden boxes, and exactly them at
+    /// `min_angle = 0`.
+    ///
     /// # Panics
     /// When `boxes` does not hold one box per position ([`Self::positions`]).
     pub fn hidden_runs(
@@ -528,8 +534,17 @@ impl BoxTree {
         vo: &PreparedVo,
         within: [f64; 4],
         boxes: &[[f64; 6]],
+        min_angle: f64,
         mut found: impl FnMut(u32, u32, &[f64; 6]),
     ) {
+        let r = view.rect;
+        let (cx, cy) = (0.5 * (r[0] + r[2]), 0.5 * (r[1] + r[3]));
+        let small = |b: &[f64; 6]| {
+            let size = (b[3] - b[0]).max(b[4] - b[1]);
+            let dx = (b[0] - cx).max(cx - b[3]).max(0.0);
+            let dy = (b[1] - cy).max(cy - b[4]).max(0.0);
+            size < min_angle * dx.hypot(dy)
+        };
         assert_eq!(boxes.len(), self.positions(), "one box per tree position");
         let meets = |b: &[f64; 6]| {
             b[0] <= within[2] && b[3] >= within[0] && b[1] <= within[3] && b[4] >= within[1]
@@ -551,6 +566,7 @@ impl BoxTree {
                     found(node.start, node.end, &node.bounds);
                     continue;
                 }
+                _ if small(&node.bounds) => continue,
                 _ => {}
             }
             let kids = node.kids();

@@ -92,7 +92,7 @@ pub(super) fn growth_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) 
     } = *setup;
     let (e0, e1) = (view.e0, view.e1);
     // The dense set, per slice.
-    let radius = plan.reach();
+    let radius = plan.params.weigh_m;
     let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
     let mut hidden: Vec<crate::bake::spans::Spans> = Vec::new();
     let mut grower = CellGrower::new(&cell, &plan.set, &plan.params.grow, plan.params.search_m);
