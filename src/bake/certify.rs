@@ -263,42 +263,9 @@ impl<'a> Certifier<'a> {
                     if n > 0 || checks > 1 {
                         stats.shrunk += 1;
                     }
-                    // Raised to the highest level that every blocker its certificates use
-                    // supports for this very segment: those blockers alone hide it (the
-                    // verifier's `hidden_by`), so rule 2 holds over them at that level.
-                    // Then, while a verifier over the blockers that support the next level for
-                    // this very segment certifies it, to the highest level the blockers of that
-                    // certificate support.
                     let (qa, qb) = (DVec2::from(geom.a), DVec2::from(geom.b));
                     let start = q.level;
-                    let tops = self.levels_beside(qa, qb);
-                    let top_of = |used: &[u32]| {
-                        used.iter()
-                            .map(|&i| {
-                                tops.binary_search_by_key(&i, |t| t.0)
-                                    .map_or(0, |k| tops[k].1)
-                            })
-                            .min()
-                            .unwrap_or(0)
-                    };
-                    q.level = q.level.max(top_of(&used));
-                    while q.level + 1 < HEIGHT_LEVELS {
-                        let next = q.level + 1;
-                        let ids: Vec<u32> = tops
-                            .iter()
-                            .filter(|&&(_, l)| l >= next)
-                            .map(|&(i, _)| i)
-                            .collect();
-                        stats.checks += 1;
-                        let v = Verifier::subset(self.cell, self.index, &ids)
-                            .with_max_step(MIN_PIECE_M);
-                        match v.hidden_by(qa, qb) {
-                            Some(u) => {
-                                q.level = next.max(top_of(&u));
-                            }
-                            None => break,
-                        }
-                    }
+                    q.level = self.raise(q.level, qa, qb, &used, stats);
                     if q.level > start {
                         stats.raised += (q.level - start) as usize;
                         geom = f.dequantize(self.id, self.ground, &q)?;
@@ -318,6 +285,48 @@ impl<'a> Certifier<'a> {
 }
 
 impl Certifier<'_> {
+    /// The highest level, from `level` up, at which the segment `a`–`b`, hidden by the blockers
+    /// `used` (indices into [`Self::blockers`]) at `level`, is certified: first the highest that
+    /// every blocker of `used` supports for this very segment by rule 2's tighter bounds (those
+    /// blockers alone hide it, so rule 2 holds over them there); then, while a verifier over the
+    /// blockers that support the next level for this very segment certifies it, the highest
+    /// level the blockers of that certificate support.
+    pub fn raise(
+        &self,
+        level: u8,
+        a: DVec2,
+        b: DVec2,
+        used: &[u32],
+        stats: &mut CertifyStats,
+    ) -> u8 {
+        let tops = self.levels_beside(a, b);
+        let top_of = |used: &[u32]| {
+            used.iter()
+                .map(|&i| {
+                    tops.binary_search_by_key(&i, |t| t.0)
+                        .map_or(0, |k| tops[k].1)
+                })
+                .min()
+                .unwrap_or(0)
+        };
+        let mut level = level.max(top_of(used));
+        while level + 1 < HEIGHT_LEVELS {
+            let next = level + 1;
+            let ids: Vec<u32> = tops
+                .iter()
+                .filter(|&&(_, l)| l >= next)
+                .map(|&(i, _)| i)
+                .collect();
+            stats.checks += 1;
+            let v = Verifier::subset(self.cell, self.index, &ids).with_max_step(MIN_PIECE_M);
+            match v.hidden_by(a, b) {
+                Some(u) => level = next.max(top_of(&u)),
+                None => break,
+            }
+        }
+        level
+    }
+
     /// The highest level of this cell whose VO top stands no higher than the far piece's
     /// (at least 1: above the eyes), or `None` when even level 1 is taller.
     /// `None` too for a cell whose VOs stand lower than the piece (a deep cell's).

@@ -157,7 +157,15 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
     };
     let mut stats = CellStats::default();
     let mut t = std::time::Instant::now();
-    let (cands, hidden) = proposals(plan, &setup, &map, &propose, &mut t, &mut stats);
+    let (cands, hidden) = proposals(
+        plan,
+        &setup,
+        &map,
+        &propose,
+        plan.params.weigh_m,
+        &mut t,
+        &mut stats,
+    );
     let index = BlockerIndex::new(
         setup
             .near
@@ -205,11 +213,21 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
                     value: p,
                 })
                 .collect(),
-            Stage::Certified => vec![Candidate {
-                stage: Stage::Stored,
-                value: c.value.clone(),
-                hidden: c.hidden.clone(),
-            }],
+            // Raised as high as its blockers support it for this very segment (a far piece's
+            // height is what hides the towers behind it).
+            Stage::Certified => {
+                let p = &c.value;
+                let level = certifier.raise(p.level, p.a, p.b, &p.used, &mut cs);
+                let p = Piece {
+                    level,
+                    ..p.clone()
+                };
+                vec![Candidate {
+                    stage: Stage::Stored,
+                    hidden: plan.occludees.hidden(&view, &geom(&p), radius),
+                    value: p,
+                }]
+            }
             Stage::Stored => Vec::new(),
         },
     );

@@ -42,6 +42,7 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
         setup,
         &plan.params.map,
         &plan.params.propose,
+        plan.params.weigh_m,
         &mut t,
         stats,
     );
@@ -109,7 +110,7 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
                     stage: Stage::Certified,
                     hidden: plan
                         .occludees
-                        .hidden(&view, &geom(p.level, p.a, p.b), radius),
+                        .hidden(&view, &geom(p.level, p.a, p.b), plan.params.weigh_m),
                     value: Vo::Piece(p),
                 })
                 .collect(),
@@ -168,6 +169,7 @@ pub(super) fn proposals(
     setup: &CellSetup,
     map: &MapParams,
     propose: &ProposeParams,
+    radius: f64,
     t: &mut Instant,
     stats: &mut CellStats,
 ) -> (Vec<(u8, DVec2, DVec2)>, Vec<Spans>) {
@@ -180,7 +182,6 @@ pub(super) fn proposals(
         ref levels,
         ..
     } = *setup;
-    let radius = plan.params.weigh_m;
     let mut cands: Vec<(u8, DVec2, DVec2)> = Vec::new();
     let mut hidden: Vec<Spans> = Vec::new();
     let mut all_props: Vec<(u8, DVec2, DVec2)> = Vec::new();
@@ -458,3 +459,4 @@ mod tests {
         assert!(inside > 1000, "boxes inside the span: {inside}");
     }
 }
+
