@@ -218,10 +218,7 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
             Stage::Certified => {
                 let p = &c.value;
                 let level = certifier.raise(p.level, p.a, p.b, &p.used, &mut cs);
-                let p = Piece {
-                    level,
-                    ..p.clone()
-                };
+                let p = Piece { level, ..p.clone() };
                 vec![Candidate {
                     stage: Stage::Stored,
                     hidden: plan.occludees.hidden(&view, &geom(&p), radius),

@@ -108,9 +108,11 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
                 .into_iter()
                 .map(|p| Candidate {
                     stage: Stage::Certified,
-                    hidden: plan
-                        .occludees
-                        .hidden(&view, &geom(p.level, p.a, p.b), plan.params.weigh_m),
+                    hidden: plan.occludees.hidden(
+                        &view,
+                        &geom(p.level, p.a, p.b),
+                        plan.params.weigh_m,
+                    ),
                     value: Vo::Piece(p),
                 })
                 .collect(),
@@ -459,4 +461,3 @@ mod tests {
         assert!(inside > 1000, "boxes inside the span: {inside}");
     }
 }
-
