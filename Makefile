@@ -25,9 +25,9 @@ test:
 
 # The viewer page in a real browser (js/test-web.sh): installs Chromium from the system packages
 # when it is missing (as root), the npm packages of js/ (npm ci), checks the committed bundle
-# js/dist/viewer.js and the runtime's types, then opens the Lyon page in headless Chromium, clicks
-# a cell, checks the PVS count shown against `vocc pvs`, times the load and the PVS builds, and
-# saves a screenshot in target/tmp/web/.
+# js/dist/viewer.js and the runtime's types, then opens the Lyon page (2.0) and a Salt River page
+# (2.1, on its DEM) in headless Chromium, clicks a cell, checks the PVS count shown against `vocc
+# pvs`, times the load and the PVS builds, and saves a screenshot in target/tmp/web/.
 test-web:
 	CARGO="$(CARGO)" js/test-web.sh
 

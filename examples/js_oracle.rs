@@ -6,8 +6,9 @@
 //! `vocc::fuzzing::BLOB_FRAME`), or `hypot` with pairs of `f64` bit patterns (16 hex digits
 //! each) on standard input, one pair a line.
 //! Output: one JSON line per file, `{"file", "ok", "error"}` (the error's `Display`) and, for an
-//! accepted input, the records of every cell (`[skipped, ground, [[ae, ax, ay, be, bx, by,
-//! level], ...]]`), the version and the scene section; for `hypot`, one bit pattern a line.
+//! accepted input, the records of every cell (`[skipped, ground, rise, [[ae, ax, ay, be, bx,
+//! by, level, deep], ...]]`, the rise and deep flags of format 2.1), the version and the scene
+//! section; for `hypot`, one bit pattern a line.
 //! Invariant: only the library's public decoders are called.
 
 use std::io::BufRead;
@@ -20,9 +21,14 @@ fn record_json(rec: &CellRecord) -> serde_json::Value {
     let vos: Vec<serde_json::Value> = rec
         .vos()
         .iter()
-        .map(|q| json!([q.a.e, q.a.x, q.a.y, q.b.e, q.b.x, q.b.y, q.level]))
+        .map(|q| json!([q.a.e, q.a.x, q.a.y, q.b.e, q.b.x, q.b.y, q.level, q.deep]))
         .collect();
-    json!([matches!(rec, CellRecord::Skipped), rec.ground(), vos])
+    json!([
+        matches!(rec, CellRecord::Skipped),
+        rec.ground(),
+        rec.rise(),
+        vos
+    ])
 }
 
 fn store(bytes: &[u8]) -> Result<serde_json::Value, FormatError> {

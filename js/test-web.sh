@@ -3,9 +3,9 @@
 # /usr/bin/chromium is missing (as root, with apt-get), the npm packages of js/ (npm ci:
 # three, esbuild, playwright-core, typescript), checks that the committed bundle
 # js/dist/viewer.js is what js/viewer/build.mjs builds and that the runtime's types check (tsc),
-# bakes Lyon, writes its page with `vocc view`, and runs js/test/web.mjs on it in headless
-# Chromium (a click on a cell and a walk, checked against `vocc pvs`; screenshots in
-# target/tmp/web/; load and PVS times printed).
+# bakes Lyon (2.0) and a block of Salt River on its DEM (2.1), writes their pages with `vocc
+# view`, and runs js/test/web.mjs on each in headless Chromium (a click on a cell and a walk,
+# checked against `vocc pvs`; screenshots in target/tmp/web/; load and PVS times printed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CARGO=${CARGO:-cargo}
@@ -35,4 +35,11 @@ target/debug/vocc bake "$scene" --height-attr HAUTEUR -o "$out/lyon.vocc" 2>/dev
 target/debug/vocc view "$out/lyon.vocc" "$scene" --height-attr HAUTEUR -o "$out/lyon.html"
 node js/test/web.mjs --page "$out/lyon.html" --store "$out/lyon.vocc" --vocc target/debug/vocc \
   --shot "$out/lyon.png" --cell 104 -- "$scene" --height-attr HAUTEUR
-echo "test-web: 1 passed, 0 failed"
+# A 2.1 store (rises and deep VOs): the block of Salt River on its DEM that js/test.sh bakes.
+sr=(data/capetown/salt_river_footprints_utm34s.geojson --height-attr height --base-attr base_z
+  --terrain data/capetown/capetown_dem25m_utm34s.tif)
+target/debug/vocc bake "${sr[@]}" --region 264910,6242690,265600,6243080 -o "$out/saltriver.vocc" 2>/dev/null
+target/debug/vocc view "$out/saltriver.vocc" "${sr[@]}" -o "$out/saltriver.html"
+node js/test/web.mjs --page "$out/saltriver.html" --store "$out/saltriver.vocc" --vocc target/debug/vocc \
+  --shot "$out/saltriver.png" --cell 257 -- "${sr[@]}"
+echo "test-web: 2 passed, 0 failed"

@@ -198,7 +198,8 @@ export class BoxTree {
  */
 export function pvs(frame, id, record, tree, stats) {
   const n = tree.length;
-  const view = frame.cellView(id, record.ground);
+  // Where the cell stands: its ground level and, in 2.1, its rise (the top eye).
+  const view = frame.cellView(id, record);
   const all = () => {
     const out = new Uint32Array(n);
     for (let i = 0; i < n; i++) out[i] = i;
@@ -208,7 +209,7 @@ export function pvs(frame, id, record, tree, stats) {
   /** @type {PreparedVo[]} */
   const prepared = [];
   for (const q of record.vos) {
-    const g = frame.dequantize(id, record.ground, q);
+    const g = frame.dequantize(id, record, q);
     if (!g) continue;
     const p = new PreparedVo(view, g);
     if (p.usable && p.heightsOk) prepared.push(p);

@@ -29,11 +29,15 @@ const MESSAGES = {
   PayloadLength: (f) => `payload_len is ${f.stored}, the counts give ${f.expected}`,
   DegenerateVo: (f) =>
     `VO ${f.vo} of cell ${f.cell} at offset ${f.offset} is degenerate (one grid point)`,
+  // A 2.0 reader's refusal of a 2.1 deep VO; this reader (as Rust's) reads bit 47 and never
+  // throws it.
   ReservedVoBit: (f) => `VO ${f.vo} of cell ${f.cell} at offset ${f.offset} sets the reserved bit 47`,
   NonCanonicalVo: (f) =>
     `VO ${f.vo} of cell ${f.cell} at offset ${f.offset}: endpoint ${f.endpoint} is not canonical (a smaller exponent holds it)`,
   CrsNotUtf8: (f) => `the CRS name is not UTF-8 (at offset ${f.offset})`,
   CellOutOfGrid: (f) => `cell ${f.id} is outside the grid of ${f.cells} cells`,
+  BadRise: (f) =>
+    `cell ${f.cell}'s rise ${f.rise} at offset ${f.offset} is 0 or takes its ground level ${f.ground} past 255`,
 };
 
 export class FormatError extends Error {

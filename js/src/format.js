@@ -3,20 +3,25 @@
  * The store file and the cell blob (FORMAT.md sections 5, 6, 8 and 12): the port of
  * src/runtime/format/{mod,records,store,blob}.rs.
  *
- * Input: untrusted bytes (a `Uint8Array`) of a store file or a blob, majors 2 and 1. Output: a
- * {@link Store} that answers per-cell queries, or a blob's cell id and record.
+ * Input: untrusted bytes (a `Uint8Array`) of a store file or a blob, majors 2 (with its minor
+ * 2.1) and 1. Output: a {@link Store} that answers per-cell queries, or a blob's cell id and
+ * record.
  * Invariants:
  * - the rules of FORMAT.md section 8 are checked in the document's order and the first broken
  *   one is thrown as a {@link FormatError} with the Rust error's kind, fields and message;
  * - nothing is read outside the input, and nothing is allocated in proportion to a length
  *   field (only to the input's own size);
- * - one decoder reads both majors: a 1.0 VO (5 bytes) comes out as the 2.0 VO with exponents 0.
+ * - one decoder reads both majors: a 1.0 VO (5 bytes) comes out as the 2.0 VO with exponents 0;
+ * - 2.1 (FORMAT.md 13) is read as Rust reads it: index and count values `11..=20` (a 2.0 store
+ *   or blob with ground bytes only) announce `value - 10` VOs after a ground byte and a rise
+ *   byte (checked by S22/B14, `BadRise`), and bit 47 of a VO is its deep flag.
  *
  * Extending it (a minor version giving meaning to a reserved value, FORMAT.md 2.4): a store
  * flag is a bit of {@link KNOWN_FLAGS} and a field of {@link Store}; an index value of the
- * reserved range `11..=254` is a case of `countOf` (how many VOs it announces) and of
- * `recordSize` (how many payload bytes its record takes), the only two places that read index
- * values, with the record's new bytes read in `readRecord`; new VO bytes belong to the
+ * reserved range `21..=254` is a case of `countOf` (whether it is valid), `split` (how many VOs
+ * it announces and what the record holds besides) and `recordSize` (how many payload bytes its
+ * record takes), the only places that read index values, with the record's new bytes read in
+ * `readRecord` (as 2.1's rise byte is); new VO bytes belong to the
  * version's entry of {@link VERSIONS} (`voBytes`, `decodeVo`). Every length, offset and check
  * below goes through these, so nothing else changes.
  */
@@ -44,19 +49,23 @@ const CRC_OFFSET = 132;
 const BLOB_COUNT_OFFSET = 9;
 const BLOB_RECORD_OFFSET = 10;
 
+/** Index values `RISE_BASE + n` (`n` in `1..=10`) announce `n` VOs after a ground byte and a
+ * rise byte (format 2.1). */
+export const RISE_BASE = 10;
+
 /**
- * A 2.0 VO from its 6 bytes at `at` (FORMAT.md 3.1), or `null` when it sets the reserved bit 47.
+ * A 2.0 VO from its 6 bytes at `at` (FORMAT.md 3.1); every value decodes, bit 47 being the
+ * deep flag of 2.1.
  * @param {Uint8Array} b
  * @param {number} at
  */
 function decodeVoV2(b, at) {
-  if (b[at + 5] & 0x80) return null;
   const lo = b[at] | (b[at + 1] << 8) | (b[at + 2] << 16); // bits 0..24
   const hi = b[at + 3] | (b[at + 4] << 8) | (b[at + 5] << 16); // bits 24..48
   const a = lo & 0x1fffff;
   const bb = (lo >>> 21) | ((hi & 0x3ffff) << 3);
   const p = (/** @type {number} */ v) => new QPoint(v & 7, (v >>> 3) & 0x1ff, (v >>> 12) & 0x1ff);
-  return new QVo(p(a), p(bb), (hi >>> 18) & 0x1f);
+  return new QVo(p(a), p(bb), (hi >>> 18) & 0x1f, (hi & 0x800000) !== 0);
 }
 
 /**
@@ -80,62 +89,91 @@ function decodeVoV1(b, at) {
  * @property {number} voBytes bytes per stored VO
  * @property {number} topLevel the highest height level (frame rule F12 checks its top)
  * @property {boolean} sceneSection whether a scene section follows the header
- * @property {(b: Uint8Array, at: number) => QVo | null} decodeVo `null`: the reserved bit is set
+ * @property {(b: Uint8Array, at: number) => QVo} decodeVo every value decodes (a 2.0 VO's bit
+ *   47 is the deep flag of 2.1)
+ * @property {boolean} rise whether index values `11..=20` (2.1, with ground bytes) are read
  */
 
 /** The majors this reader implements, and what differs between them. @type {Record<number, Version>} */
 export const VERSIONS = {
-  1: { major: 1, voBytes: 5, topLevel: HEIGHT_LEVELS_V1 - 1, sceneSection: false, decodeVo: decodeVoV1 },
-  2: { major: 2, voBytes: 6, topLevel: HEIGHT_LEVELS - 1, sceneSection: true, decodeVo: decodeVoV2 },
+  1: { major: 1, voBytes: 5, topLevel: HEIGHT_LEVELS_V1 - 1, sceneSection: false, decodeVo: decodeVoV1, rise: false },
+  2: { major: 2, voBytes: 6, topLevel: HEIGHT_LEVELS - 1, sceneSection: true, decodeVo: decodeVoV2, rise: true },
 };
 
 /**
- * The record of one cell: skipped (inside a building), or a ground level and at most 10 VOs.
- * @typedef {{skipped: boolean, ground: number, vos: QVo[]}} CellRecord
+ * The record of one cell: skipped (inside a building), or a ground level, a rise (format 2.1:
+ * the cell's top eye stands `rise` ground steps higher; 0 in 2.0 and 1.0, and for a skipped or
+ * empty cell) and at most 10 VOs, most effective first. Give the whole record to
+ * `Frame#cellView` and `Frame#dequantize`, which read both `ground` and `rise`.
+ * @typedef {{skipped: boolean, ground: number, rise: number, vos: QVo[]}} CellRecord
  */
 
 /** @type {CellRecord} */
-const SKIPPED_RECORD = Object.freeze({ skipped: true, ground: 0, vos: /** @type {QVo[]} */ ([]) });
+const SKIPPED_RECORD = Object.freeze({ skipped: true, ground: 0, rise: 0, vos: /** @type {QVo[]} */ ([]) });
 /** @type {CellRecord} */
-const EMPTY_RECORD = Object.freeze({ skipped: false, ground: 0, vos: /** @type {QVo[]} */ ([]) });
+const EMPTY_RECORD = Object.freeze({ skipped: false, ground: 0, rise: 0, vos: /** @type {QVo[]} */ ([]) });
 
 /**
- * VOs a valid index value announces, or -1 for a reserved value.
+ * The record a valid index value announces, as the value itself (`0` for none, `1..=10` VOs,
+ * and in 2.1, with a ground byte, `11..=20`: `value - 10` VOs after a rise byte), or -1 for a
+ * value the store or blob cannot hold (Rust's `count_of`).
  * @param {number} value
+ * @param {Version} v
+ * @param {boolean} groundByte
  */
-function countOf(value) {
+function countOf(value, v, groundByte) {
   if (value === SKIPPED) return 0;
-  return value <= MAX_VOS_PER_CELL ? value : -1;
+  if (value <= MAX_VOS_PER_CELL) return value;
+  if (v.rise && groundByte && value > RISE_BASE && value - RISE_BASE <= MAX_VOS_PER_CELL) return value;
+  return -1;
 }
 
 /**
- * Payload bytes of a cell with `n` VOs.
- * @param {number} n
+ * VOs and whether a rise byte is stored, for a value {@link countOf} gave.
+ * @param {number} c
+ */
+function split(c) {
+  return c > RISE_BASE ? { n: c - RISE_BASE, rise: true } : { n: c, rise: false };
+}
+
+/**
+ * Payload bytes of a cell whose {@link countOf} is `c`.
+ * @param {number} c
  * @param {boolean} groundByte
  * @param {Version} v
  */
-function recordSize(n, groundByte, v) {
-  return n === 0 ? 0 : n * v.voBytes + (groundByte ? 1 : 0);
+function recordSize(c, groundByte, v) {
+  const { n, rise } = split(c);
+  return n === 0 ? 0 : n * v.voBytes + (groundByte ? 1 : 0) + (rise ? 1 : 0);
 }
 
 /**
- * Decodes one record of `n >= 1` VOs whose bytes start at `at` of `bytes` (an offset of the
- * file or blob, for errors too); the caller has checked that they are all there.
+ * Decodes one record whose {@link countOf} is `c` (at least one VO), whose bytes start at `at`
+ * of `bytes` (an offset of the file or blob, for errors too); the caller has checked that they
+ * are all there. Checks, in order: the rise (S22/B14, 2.1), then VO by VO a non-canonical
+ * endpoint (S19/B12) and a degenerate VO (S13/B9).
  * @param {number} cell
- * @param {number} n
+ * @param {number} c
  * @param {boolean} groundByte
  * @param {Version} v
  * @param {Uint8Array} bytes
  * @param {number} at
  * @returns {CellRecord}
  */
-function readRecord(cell, n, groundByte, v, bytes, at) {
+function readRecord(cell, c, groundByte, v, bytes, at) {
+  const { n, rise: hasRise } = split(c);
   const ground = groundByte ? bytes[at] : 0;
+  // A rise byte is only announced with a ground byte (countOf), so it follows it, at `at + 1`.
+  const rise = hasRise ? bytes[at + 1] : 0;
+  // S22/B14 (2.1): a rise byte of 0, or a top eye above ground level 255.
+  if (hasRise && (rise === 0 || ground + rise > 255)) {
+    throw new FormatError('BadRise', { cell, ground, rise, offset: at + 1 });
+  }
+  const head = (groundByte ? 1 : 0) + (hasRise ? 1 : 0);
   const vos = [];
   for (let k = 0; k < n; k++) {
-    const offset = at + (groundByte ? 1 : 0) + k * v.voBytes;
+    const offset = at + head + k * v.voBytes;
     const q = v.decodeVo(bytes, offset);
-    if (q === null) throw new FormatError('ReservedVoBit', { cell, vo: k, offset });
     if (!q.isCanonical()) {
       const endpoint = q.a.isCanonical() ? 'b' : 'a';
       throw new FormatError('NonCanonicalVo', { cell, vo: k, offset, endpoint });
@@ -143,7 +181,7 @@ function readRecord(cell, n, groundByte, v, bytes, at) {
     if (q.isDegenerate()) throw new FormatError('DegenerateVo', { cell, vo: k, offset });
     vos.push(q);
   }
-  return { skipped: false, ground, vos };
+  return { skipped: false, ground, rise, vos };
 }
 
 /**
@@ -276,10 +314,11 @@ export class Store {
     this.payloadOffset = payloadOffset;
     this.dv = dv;
 
-    // S10: every index value is a count or skipped.
+    // S10: every index value is a count or skipped (or, in 2.1 with ground bytes, a count with
+    // a rise).
     for (let i = 0; i < cells; i++) {
       const value = bytes[indexOffset + i];
-      if (countOf(value) < 0) {
+      if (countOf(value, version, this.groundByte) < 0) {
         throw new FormatError('BadIndexByte', { cell: i, value, offset: indexOffset + i });
       }
     }
@@ -296,12 +335,13 @@ export class Store {
     if (off !== payloadLen) {
       throw new FormatError('PayloadLength', { stored: payloadLen, expected: off });
     }
-    // S18, S19, S13: VO by VO in file order.
+    // S22 (2.1), then S19 and S13 VO by VO (S18: bit 47 is read as the deep flag), in file
+    // order.
     off = 0;
     for (let i = 0; i < cells; i++) {
       const value = bytes[indexOffset + i];
-      const n = countOf(value);
-      if (n > 0) readRecord(i, n, this.groundByte, version, bytes, payloadOffset + off);
+      const c = countOf(value, version, this.groundByte);
+      if (c > 0) readRecord(i, c, this.groundByte, version, bytes, payloadOffset + off);
       off += this.sizeOf(value);
     }
   }
@@ -311,7 +351,7 @@ export class Store {
    * @param {number} value
    */
   sizeOf(value) {
-    return recordSize(Math.max(countOf(value), 0), this.groundByte, this.version);
+    return recordSize(Math.max(countOf(value, this.version, this.groundByte), 0), this.groundByte, this.version);
   }
 
   /** Bytes per stored VO in this file: 6 (2.0) or 5 (1.0). */
@@ -339,12 +379,12 @@ export class Store {
     }
     const value = this.bytes[this.indexOffset + id];
     if (value === SKIPPED) return SKIPPED_RECORD;
-    const n = countOf(value);
-    if (n === 0) return EMPTY_RECORD;
+    const c = countOf(value, this.version, this.groundByte);
+    if (c === 0) return EMPTY_RECORD;
     const block = Math.floor(id / CELLS_PER_BLOCK);
     let off = this.dv.getUint32(this.tableOffset + 4 * block, true);
     for (let i = block * CELLS_PER_BLOCK; i < id; i++) off += this.sizeOf(this.bytes[this.indexOffset + i]);
-    return readRecord(id, n, this.groundByte, this.version, this.bytes, this.payloadOffset + off);
+    return readRecord(id, c, this.groundByte, this.version, this.bytes, this.payloadOffset + off);
   }
 
   /**
@@ -375,18 +415,18 @@ export function decodeBlob(frame, bytes) {
   const dv = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   const id = dv.getUint32(5, true);
   const value = bytes[BLOB_COUNT_OFFSET];
-  const n = countOf(value);
-  if (n < 0) throw new FormatError('BadIndexByte', { cell: id, value, offset: BLOB_COUNT_OFFSET });
   const groundByte = frame.perCellGround();
-  exactLength(BLOB_MIN_LEN + recordSize(n, groundByte, version), got);
+  const c = countOf(value, version, groundByte);
+  if (c < 0) throw new FormatError('BadIndexByte', { cell: id, value, offset: BLOB_COUNT_OFFSET });
+  exactLength(BLOB_MIN_LEN + recordSize(c, groundByte, version), got);
   const stored = dv.getUint32(got - 4, true);
   const computed = crc32(bytes, 0, got - 4);
   if (stored !== computed) throw new FormatError('Checksum', { stored, computed });
   const cells = frame.cellCount();
   if (id >= cells) throw new FormatError('CellOutOfGrid', { id, cells });
   if (value === SKIPPED) return { id, record: SKIPPED_RECORD };
-  if (n === 0) return { id, record: EMPTY_RECORD };
-  return { id, record: readRecord(id, n, groundByte, version, bytes, BLOB_RECORD_OFFSET) };
+  if (c === 0) return { id, record: EMPTY_RECORD };
+  return { id, record: readRecord(id, c, groundByte, version, bytes, BLOB_RECORD_OFFSET) };
 }
 
 export { FRAME_LEN };

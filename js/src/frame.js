@@ -5,7 +5,8 @@
  * src/runtime/format/frame.rs.
  *
  * Input: 112 bytes, or a frame's fields. Output: a checked {@link Frame}; cell ids at
- * positions, cell rectangles, eye heights, VO tops and dequantized VOs.
+ * positions, cell rectangles, eye heights (with a 2.1 cell's rise), VO tops and dequantized
+ * VOs (a 2.1 deep VO standing from `ground_z0`).
  * Invariants: every number is computed with the same IEEE operations, in the same order, as
  * the Rust code, so the same bits (JavaScript numbers are binary64, and neither side contracts
  * into fused multiply-adds); the rules F1..F12 are checked in the document's order and the first
@@ -89,17 +90,20 @@ export class QPoint {
   }
 }
 
-/** One VO as stored: two endpoints and a height level. */
+/** One VO as stored: two endpoints, a height level and where its bottom stands. */
 export class QVo {
   /**
    * @param {QPoint} a
    * @param {QPoint} b
    * @param {number} level
+   * @param {boolean} [deep] format 2.1 (bit 47): the VO stands from the frame's lowest ground
+   *   level (`ground_z0`) rather than from its cell's ground (FORMAT.md 3.4); false in 2.0
    */
-  constructor(a, b, level) {
+  constructor(a, b, level, deep = false) {
     this.a = a;
     this.b = b;
     this.level = level;
+    this.deep = deep;
   }
 
   isCanonical() {
@@ -160,6 +164,16 @@ export class Frame {
   }
 
   /**
+   * The top eye of a cell standing on `stand`: `ground_z(level) + rise * ground_step +
+   * eye_hi`, in that order (FORMAT.md 3.4; Rust's `Frame::top_eye`).
+   * @param {Stand} stand
+   */
+  topEye(stand) {
+    const s = standOf(stand);
+    return this.groundZ(s.level) + s.rise * this.groundStep + this.eyeHi;
+  }
+
+  /**
    * VO top of level `level` for a cell whose top eye is at `e1` (FORMAT.md 3.4).
    * @param {number} e1
    * @param {number} level
@@ -216,39 +230,59 @@ export class Frame {
   }
 
   /**
-   * The cell as rule 3 sees it: rectangle and eye heights, for ground level `ground`.
+   * The cell as rule 3 sees it: rectangle and eye heights, for a cell standing on `stand` (its
+   * record, or a bare ground level with no rise): eyes from `g + eye_lo` to the top eye
+   * `g + rise * ground_step + eye_hi` (FORMAT.md 3.4). Pass the record: a 2.1 cell's rise
+   * raises its top eye, and leaving it out would cull with eyes lower than the cameras'.
    * @param {number} id
-   * @param {number} ground
+   * @param {Stand} stand
    * @returns {CellView | null}
    */
-  cellView(id, ground) {
+  cellView(id, stand) {
     const rect = this.cellRect(id);
     if (!rect) return null;
-    const g = this.groundZ(ground);
-    return { rect, e0: g + this.eyeLo, e1: g + this.eyeHi };
+    const g = this.groundZ(standOf(stand).level);
+    return { rect, e0: g + this.eyeLo, e1: this.topEye(stand) };
   }
 
   /**
-   * The geometry of a stored VO of cell `id` on ground level `ground`: segment `a`–`b`
-   * (local) standing from `g` to `h`.
+   * The geometry of a stored VO of cell `id` standing on `stand` (its record, or a bare ground
+   * level): segment `a`–`b` (local) standing from the cell's ground `g`, or from `ground_z0`
+   * for a deep VO (2.1), to the top `h` of its level above the cell's top eye.
    * @param {number} id
-   * @param {number} ground
+   * @param {Stand} stand
    * @param {QVo} q
    * @returns {VoGeom | null}
    */
-  dequantize(id, ground, q) {
+  dequantize(id, stand, q) {
     const c = this.cellCentre(id);
     if (!c) return null;
-    const g = this.groundZ(ground);
+    const g = this.groundZ(standOf(stand).level);
     const oa = q.a.offset(this.quantum);
     const ob = q.b.offset(this.quantum);
     return {
       a: [c[0] + oa[0], c[1] + oa[1]],
       b: [c[0] + ob[0], c[1] + ob[1]],
-      g,
-      h: this.voTop(g + this.eyeHi, q.level),
+      g: q.deep ? this.groundZ0 : g,
+      h: this.voTop(this.topEye(stand), q.level),
     };
   }
+}
+
+/**
+ * Where a cell stands: a bare ground level (rise 0), or anything with the `ground` level and
+ * `rise` of a cell record (format 2.1; 0 in 2.0), such as the record itself.
+ * @typedef {number | {ground: number, rise?: number}} Stand
+ */
+
+/**
+ * `stand` as a level and a rise.
+ * @param {Stand} stand
+ * @returns {{level: number, rise: number}}
+ */
+export function standOf(stand) {
+  if (typeof stand === 'number') return { level: stand, rise: 0 };
+  return { level: stand.ground, rise: stand.rise ?? 0 };
 }
 
 /**

@@ -5,8 +5,9 @@
 export class FormatError extends Error {
   constructor(kind: string, fields?: Record<string, unknown>);
   /** `Truncated`, `TrailingBytes`, `BadMagic`, `UnsupportedVersion`, `UnknownFlags`, `BadFrame`,
-   * `Checksum`, `BadIndexByte`, `BlockOffset`, `PayloadLength`, `DegenerateVo`, `ReservedVoBit`,
-   * `NonCanonicalVo`, `CrsNotUtf8` or `CellOutOfGrid`. */
+   * `Checksum`, `BadIndexByte`, `BlockOffset`, `PayloadLength`, `DegenerateVo`, `BadRise`,
+   * `NonCanonicalVo`, `CrsNotUtf8` or `CellOutOfGrid` (`ReservedVoBit` is a 2.0 reader's
+   * refusal of a 2.1 deep VO: this reader reads bit 47 and never throws it). */
   kind: string;
   /** The variant's fields: offsets (from the start of the file or blob), values, rules. */
   fields: Record<string, any>;
@@ -22,6 +23,8 @@ export const MAX_VOS_PER_CELL: 10;
 export const HEADER_LEN: 136;
 export const BLOB_MIN_LEN: 14;
 export const SKIPPED: 255;
+/** Index values `RISE_BASE + n` (`n` in 1..=10) announce `n` VOs with a rise byte (2.1). */
+export const RISE_BASE: 10;
 /** Store flag bits this reader knows (none: every bit is reserved in 1.0 and 2.0). */
 export const KNOWN_FLAGS: number;
 /** Rule 3's safety margin, metres. */
@@ -31,7 +34,8 @@ export const LEAF_SIZE: number;
 
 /** A cell as rule 3 sees it: rectangle `[x0, y0, x1, y1]` and eye heights, local frame. */
 export interface CellView { rect: number[]; e0: number; e1: number }
-/** A VO as geometry: segment `a`–`b` (local) standing from `g` to `h`. */
+/** A VO as geometry: segment `a`–`b` (local) standing from `g` (the cell's ground, or
+ * `ground_z0` for a deep VO) to `h`. */
 export interface VoGeom { a: number[]; b: number[]; g: number; h: number }
 
 /** A quantized endpoint: `centre + (x - 256, y - 256) * quantum * 2^e`. */
@@ -45,12 +49,14 @@ export class QPoint {
   offset(quantum: number): number[];
 }
 
-/** One stored VO: two endpoints and a height level (0..32; 0..16 in 1.0). */
+/** One stored VO: two endpoints, a height level (0..32; 0..16 in 1.0) and the deep flag. */
 export class QVo {
-  constructor(a: QPoint, b: QPoint, level: number);
+  constructor(a: QPoint, b: QPoint, level: number, deep?: boolean);
   a: QPoint;
   b: QPoint;
   level: number;
+  /** Format 2.1 (bit 47): the VO stands from `ground_z0`, not from its cell's ground. */
+  deep: boolean;
   isCanonical(): boolean;
   isDegenerate(): boolean;
 }
@@ -70,6 +76,8 @@ export class Frame implements FrameFields {
   cellCount(): number;
   perCellGround(): boolean;
   groundZ(level: number): number;
+  /** The top eye of a cell standing on `stand`: `groundZ(level) + rise * groundStep + eyeHi`. */
+  topEye(stand: Stand): number;
   voTop(e1: number, level: number): number;
   /** The cell at a local position, or null outside the grid (and for NaN). */
   cellAt(x: number, y: number): number | null;
@@ -77,9 +85,16 @@ export class Frame implements FrameFields {
   cellAtWorld(x: number, y: number): number | null;
   cellRect(id: number): number[] | null;
   cellCentre(id: number): number[] | null;
-  cellView(id: number, ground: number): CellView | null;
-  dequantize(id: number, ground: number, q: QVo): VoGeom | null;
+  /** The cell's rectangle and eyes; give it the cell's record (its rise raises the top eye). */
+  cellView(id: number, stand: Stand): CellView | null;
+  /** A stored VO as geometry; give it the cell's record (its rise raises the VO's top). */
+  dequantize(id: number, stand: Stand, q: QVo): VoGeom | null;
 }
+
+/** Where a cell stands: a bare ground level (rise 0), or a record's `ground` and `rise` (2.1). */
+export type Stand = number | { ground: number; rise?: number };
+/** `stand` as a level and a rise. */
+export function standOf(stand: Stand): { level: number; rise: number };
 
 /** Decodes and checks the 112 bytes of a frame (the `.frame` file beside blobs). */
 export function decodeFrame(bytes: Uint8Array): Frame;
@@ -89,8 +104,9 @@ export function validateFrame(frame: Frame, topLevel?: number): void;
 /** `r^k` by binary powering, as the Rust runtime computes VO tops. */
 export function powU8(r: number, k: number): number;
 
-/** One cell's record: skipped, or a ground level and at most 10 VOs. */
-export interface CellRecord { skipped: boolean; ground: number; vos: QVo[] }
+/** One cell's record: skipped, or a ground level, a rise (2.1: the top eye stands `rise` ground
+ * steps higher; 0 in 2.0 and 1.0) and at most 10 VOs. */
+export interface CellRecord { skipped: boolean; ground: number; rise: number; vos: QVo[] }
 
 /** What differs between the majors read (1 and 2). */
 export interface Version {
@@ -98,11 +114,13 @@ export interface Version {
   voBytes: number;
   topLevel: number;
   sceneSection: boolean;
-  decodeVo(bytes: Uint8Array, at: number): QVo | null;
+  decodeVo(bytes: Uint8Array, at: number): QVo;
+  /** Whether index values 11..=20 (2.1, with ground bytes) are read. */
+  rise: boolean;
 }
 export const VERSIONS: Record<number, Version>;
 
-/** A store file (2.0 or 1.0), checked whole by `Store.parse`; keeps a reference to the bytes. */
+/** A store file (2.0, its minor 2.1, or 1.0), checked whole by `Store.parse`; keeps a reference to the bytes. */
 export class Store {
   static parse(bytes: Uint8Array): Store;
   constructor(bytes: Uint8Array);
@@ -125,7 +143,7 @@ export class Store {
   cellAt(x: number, y: number): number | null;
 }
 
-/** Decodes and checks a cell blob (2.0 or 1.0) against the frame of its store. */
+/** Decodes and checks a cell blob (2.0 and 2.1, or 1.0) against the frame of its store. */
 export function decodeBlob(frame: Frame, bytes: Uint8Array): { id: number; record: CellRecord };
 
 /** A VO prepared for the box tests of rule 3 against one cell. */

@@ -1,8 +1,9 @@
 // @ts-check
 // The culler: the tree's PVS against the box-by-box rule on random scenes (walls around a cell,
-// boxes of every size, invalid ones, ones touching the cell, ones reaching below the VOs), the
-// cases that keep everything, the document's stores driving it (tests/format.rs's
-// doc_stores_drive_the_culler), and f32Below.
+// boxes of every size, invalid ones, ones touching the cell, ones reaching below the VOs), also
+// with 2.1 records (a rise, deep VOs, boxes downhill), the cases that keep everything, the
+// document's stores driving it (tests/format.rs's doc_stores_drive_the_culler, and section 13's
+// rise and deep VO), and f32Below.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -30,9 +31,9 @@ const frame = () =>
  * @param {Frame} f @param {number} id @param {any} rec @param {number[][]} boxes
  */
 function bruteForce(f, id, rec, boxes) {
-  const view = f.cellView(id, rec.ground);
+  const view = f.cellView(id, rec);
   if (!view || rec.skipped) return boxes.map((_, i) => i);
-  const prepared = rec.vos.map((/** @type {QVo} */ q) => new PreparedVo(view, /** @type {any} */ (f.dequantize(id, rec.ground, q))));
+  const prepared = rec.vos.map((/** @type {QVo} */ q) => new PreparedVo(view, /** @type {any} */ (f.dequantize(id, rec, q))));
   const out = [];
   for (let i = 0; i < boxes.length; i++) {
     const b = boxes[i];
@@ -42,8 +43,12 @@ function bruteForce(f, id, rec, boxes) {
   return out;
 }
 
-/** @param {() => number} r @param {number} nBoxes */
-function randomScene(r, nBoxes) {
+/**
+ * A random cell record and boxes; with `v21`, a rise (0 to 40 ground steps), deep VOs (one in
+ * three) and boxes reaching down to 12 m under the cell's ground.
+ * @param {() => number} r @param {number} nBoxes @param {boolean} [v21]
+ */
+function randomScene(r, nBoxes, v21 = false) {
   const k = (/** @type {number} */ x) => Math.trunc(256 + (x - 250) / 0.5);
   const vos = [];
   const nVos = 1 + Math.trunc(r() * 10);
@@ -58,19 +63,22 @@ function randomScene(r, nBoxes) {
     } else {
       q = new QVo(new QPoint(Math.trunc(r() * 3), Math.trunc(r() * 512), Math.trunc(r() * 512)), new QPoint(0, Math.trunc(r() * 512), Math.trunc(r() * 512)), Math.trunc(r() * 32));
     }
+    if (v21) q.deep = r() < 1 / 3;
     if (!q.isDegenerate()) vos.push(q);
   }
-  const ground = Math.trunc(r() * 8);
+  const ground = v21 ? 20 + Math.trunc(r() * 8) : Math.trunc(r() * 8);
+  const rise = v21 && r() < 0.8 ? 1 + Math.trunc(r() * 40) : 0;
   const g = 160 + ground * 0.5;
   const boxes = [];
   for (let i = 0; i < nBoxes; i++) {
-    const x = r() * 500, y = r() * 500, w = r() * 20, h = r() * 20, z = g + (r() * 3.2 - 0.2);
+    const x = r() * 500, y = r() * 500, w = r() * 20, h = r() * 20;
+    const z = v21 ? g + (r() * 15 - 12) : g + (r() * 3.2 - 0.2);
     const b = [x, y, z, x + w, y + h, z + r() * 15];
     if (r() < 0.02) b[Math.trunc(r() * 6)] = NaN;
     else if (r() < 0.02) [b[0], b[3]] = [b[3], b[0]];
     boxes.push(b);
   }
-  return { rec: { skipped: false, ground, vos }, boxes };
+  return { rec: { skipped: false, ground, rise, vos }, boxes };
 }
 
 test('the tree equals the box-by-box rule on random scenes', () => {
@@ -90,13 +98,38 @@ test('the tree equals the box-by-box rule on random scenes', () => {
   assert.ok(visible < 0.9 * total && visible > 0.3 * total, `${visible} of ${total}`);
 });
 
+test('the tree equals the box-by-box rule on random 2.1 scenes (rise, deep VOs, boxes downhill)', () => {
+  const f = frame();
+  const r = lcg(0x21);
+  let visible = 0, total = 0, riseMatters = 0, deepMatters = 0;
+  for (let scene = 0; scene < 80; scene++) {
+    const { rec, boxes } = randomScene(r, 50 + scene * 40, true);
+    const tree = new BoxTree(boxes.flat());
+    for (const id of [12, 6, 0, 24]) {
+      const got = Array.from(pvs(f, id, rec, tree));
+      assert.deepEqual(got, bruteForce(f, id, rec, boxes), `scene ${scene} cell ${id}`);
+      visible += got.length;
+      total += boxes.length;
+      // The rise and the deep flags change the answer (so both are read), and the rise raises
+      // the eyes and the VO tops together: the PVS without it holds the PVS with it.
+      const flat = Array.from(pvs(f, id, { ...rec, rise: 0 }, tree));
+      if (flat.length !== got.length) riseMatters++;
+      assert.ok(got.every((i) => flat.includes(i)) || rec.rise === 0, `scene ${scene} cell ${id}`);
+      const shallow = { ...rec, vos: rec.vos.map((q) => new QVo(q.a, q.b, q.level, false)) };
+      if (Array.from(pvs(f, id, shallow, tree)).length !== got.length) deepMatters++;
+    }
+  }
+  assert.ok(visible < 0.9 * total && visible > 0.3 * total, `${visible} of ${total}`);
+  assert.ok(riseMatters > 10 && deepMatters > 10, `rise changed ${riseMatters} PVSs, deep ${deepMatters}`);
+});
+
 test('skipped cells, cells without VOs, cells outside the grid and empty trees keep everything', () => {
   const f = frame();
   const { rec, boxes } = randomScene(lcg(3), 300);
   const tree = new BoxTree(boxes.flat());
   const all = boxes.map((_, i) => i);
-  assert.deepEqual(Array.from(pvs(f, 12, { skipped: true, ground: 0, vos: [] }, tree)), all);
-  assert.deepEqual(Array.from(pvs(f, 12, { skipped: false, ground: 0, vos: [] }, tree)), all);
+  assert.deepEqual(Array.from(pvs(f, 12, { skipped: true, ground: 0, rise: 0, vos: [] }, tree)), all);
+  assert.deepEqual(Array.from(pvs(f, 12, { skipped: false, ground: 0, rise: 0, vos: [] }, tree)), all);
   assert.deepEqual(Array.from(pvs(f, 25, rec, tree)), all);
   assert.deepEqual(Array.from(pvs(f, 12, rec, new BoxTree([]))), []);
   assert.deepEqual(Array.from(pvs(f, 12, rec, new BoxTree([1, 0, 0, 0, 1, 1, 0, 0, 0, Infinity, 1, 1]))), [0, 1]);
@@ -116,6 +149,23 @@ test("the document's stores drive the culler (both versions)", () => {
   // World boxes give the same tree.
   const world = BoxTree.fromWorld([843000, 6518700, 162, 843040, 6518740, 400], s.frame.origin);
   assert.deepEqual(Array.from(pvs(s.frame, 0, s.cell(0), world)), []);
+});
+
+test("section 13's store drives the culler: the deep far wall hides what lies below the cell", () => {
+  const s = Store.parse(docHex('store-2.1'));
+  const r = s.cell(0);
+  // Behind the far wall (y = 650, x -198..402): a box from 160.5 m (under the cell's ground of
+  // 162, over ground_z0 = 160) to 300 m, and one from 159 m (under ground_z0).
+  const tree = new BoxTree([0, 700, 160.5, 40, 740, 300, 0, 700, 159, 40, 740, 300]);
+  assert.deepEqual(Array.from(pvs(s.frame, 0, r, tree)), [1]);
+  // Not deep, the wall stands from 162 m and hides neither.
+  const shallow = { ...r, vos: r.vos.map((q) => new QVo(q.a, q.b, q.level, false)) };
+  assert.deepEqual(Array.from(pvs(s.frame, 0, shallow, tree)), [0, 1]);
+  // The rise: the wall's top is 509.94 m with it (eyes to 167 m), 506.94 m without; a box 1 m
+  // behind it up to 509 m is hidden only with the rise.
+  const top = new BoxTree([0, 651, 162, 40, 652, 509]);
+  assert.deepEqual(Array.from(pvs(s.frame, 0, r, top)), []);
+  assert.deepEqual(Array.from(pvs(s.frame, 0, { ...r, rise: 0 }, top)), [0]);
 });
 
 test('f32Below rounds down to an f32, and no lower', () => {

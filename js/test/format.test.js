@@ -1,8 +1,9 @@
 // @ts-check
 // The JavaScript decoders against docs/FORMAT.md, as tests/format.rs checks the Rust ones: the
-// worked examples of both versions byte for byte, and one test per row of the "accepted?"
-// tables (8.1 store, 8.2 frame, 8.3 blob), on both majors where the row applies to both, with
-// the same error kind, fields and message as the Rust decoder.
+// worked examples of every version (2.0, 1.0 and 2.1) byte for byte, and one test per row of the
+// "accepted?" tables (8.1 store, 8.2 frame, 8.3 blob), on both majors where the row applies to
+// both, with the same error kind, fields and message as the Rust decoder (corpus.test.js also
+// runs the 2.1 rows' inputs through the Rust decoder itself).
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -15,20 +16,24 @@ import {
 } from './helpers.js';
 
 const p = (/** @type {number} */ e, /** @type {number} */ x, /** @type {number} */ y) => ({ e, x, y });
-const q = (/** @type {number[]} */ [x1, y1, x2, y2, level]) => ({ a: p(0, x1, y1), b: p(0, x2, y2), level });
-/** @param {any} rec */
-const plain = (rec) => JSON.parse(JSON.stringify(rec));
+/** A VO as a decoded record holds it (`deep` false unless given). */
+const v = (/** @type {{e: number, x: number, y: number}} */ a, /** @type {{e: number, x: number, y: number}} */ b, /** @type {number} */ level, deep = false) => ({ a, b, level, deep });
+const q = (/** @type {number[]} */ [x1, y1, x2, y2, level]) => v(p(0, x1, y1), p(0, x2, y2), level);
+/** A record as the decoders give it (rise 0 unless given). */
+const rec = (/** @type {number} */ ground, /** @type {any[]} */ vos, rise = 0) => ({ skipped: false, ground, rise, vos });
+/** @param {any} r */
+const plain = (r) => JSON.parse(JSON.stringify(r));
 
+const SKIPPED_CELL = { skipped: true, ground: 0, rise: 0, vos: [] };
+const EMPTY_CELL = rec(0, []);
 const DOC_CELLS = [
-  { skipped: false, ground: 4, vos: [q([196, 376, 336, 376, 5]), { a: p(3, 194, 406), b: p(3, 344, 406), level: 20 }, { a: p(0, 376, 346), b: p(2, 286, 456), level: 16 }] },
-  { skipped: true, ground: 0, vos: [] },
-  { skipped: false, ground: 0, vos: [] },
+  rec(4, [q([196, 376, 336, 376, 5]), v(p(3, 194, 406), p(3, 344, 406), 20), v(p(0, 376, 346), p(2, 286, 456), 16)]),
+  SKIPPED_CELL,
+  EMPTY_CELL,
 ];
-const DOC_CELLS_V1 = [
-  { skipped: false, ground: 4, vos: [q([196, 376, 336, 376, 5]), q([376, 176, 376, 346, 3])] },
-  DOC_CELLS[1],
-  DOC_CELLS[2],
-];
+const DOC_CELLS_V1 = [rec(4, [q([196, 376, 336, 376, 5]), q([376, 176, 376, 346, 3])]), SKIPPED_CELL, EMPTY_CELL];
+/** Section 13 (2.1): cell 0 with a rise of 6, its near wall and the far wall made deep. */
+const DOC_CELLS_21 = [rec(4, [q([196, 376, 336, 376, 5]), v(p(3, 194, 406), p(3, 344, 406), 20, true)], 6), SKIPPED_CELL, EMPTY_CELL];
 
 /** The 2.0 store of 9.1 and the 1.0 store of 12, with where their parts lie. */
 function docs() {
@@ -298,12 +303,28 @@ test('S9: checksum mismatch, over every part', () => {
   }
 });
 
-test('S10: reserved index values', () => {
+test('S10: reserved index values (11..=20 only in 1.0 and without ground bytes, 2.1)', () => {
   for (const d of docs()) {
-    for (const value of [11, 12, 0x80, 254]) {
-      throwsFormat(() => Store.parse(patched(d.bytes, d.index + 1, [value])), 'BadIndexByte', { cell: 1, value, offset: d.index + 1 });
+    // 11..=20 announce a rise byte in 2.1 (section 13): reserved in 1.0 only.
+    const values = d.major === 1 ? [11, 12, 20, 21, 0x80, 254] : [21, 0x80, 254];
+    for (const value of values) {
+      const e = throwsFormat(() => Store.parse(patched(d.bytes, d.index + 1, [value])), 'BadIndexByte', { cell: 1, value, offset: d.index + 1 });
+      if (value === 21 && d.major === 2) assert.equal(e.message, `bad count 21 for cell 1 at offset ${d.index + 1} (0..=10 VOs or 255 skipped)`);
     }
   }
+  // In a 2.0 store with ground bytes, 11..=20 are counts with a rise byte: cell 1 at 11 takes a
+  // record of 6 + 2 bytes, which payload_len does not hold (S12 comes next).
+  const d = docs()[0];
+  for (const value of [11, 20]) {
+    const size = 6 * (value - 10) + 2;
+    throwsFormat(() => Store.parse(patched(d.bytes, d.index + 1, [value])), 'PayloadLength', { stored: 19, expected: 19 + size });
+  }
+  // Without ground bytes (flat ground), 11..=20 are refused in 2.0 too.
+  const flat = docFrame();
+  flat.groundStep = 0;
+  const s = encodeStore(flat, [rec(0, [q([196, 376, 336, 376, 5])], 6), {}, {}]);
+  assert.equal(s[149], 11);
+  throwsFormat(() => Store.parse(s), 'BadIndexByte', { cell: 0, value: 11, offset: 149 });
 });
 
 test('S11: a block table inconsistent with the counts', () => {
@@ -360,12 +381,12 @@ test('S14, S15, S16, S20: accepted edge cases', () => {
     assert.equal(s.length, len);
     const st = Store.parse(s);
     assert.ok(Object.is(st.frame.groundStep, -0));
-    assert.deepEqual(plain(st.cell(0)), { skipped: false, ground: 0, vos: flatCells[0].vos });
+    assert.deepEqual(plain(st.cell(0)), rec(0, flatCells[0].vos ?? []));
   }
   // S20: every exponent and level, any objects and scene, a CRS of 255 bytes of UTF-8.
-  const vos = [{ a: p(7, 0, 511), b: p(0, 1, 2), level: 31 }, { a: p(1, 127, 256), b: p(6, 511, 0), level: 0 }];
+  const vos = [v(p(7, 0, 511), p(0, 1, 2), 31), v(p(1, 127, 256), p(6, 511, 0), 0)];
   const st = Store.parse(encodeStore(f, [{ ground: 9, vos }, {}, {}], { objects: 0xffffffff, scene: 0xffffffffffffffffn, crs: 'é'.repeat(127) + 'x' }));
-  assert.deepEqual(plain(st.cell(0)), { skipped: false, ground: 9, vos });
+  assert.deepEqual(plain(st.cell(0)), rec(9, vos));
   assert.deepEqual([st.objects, st.scene, st.crs.length], [0xffffffff, 0xffffffffffffffffn, 128]);
 });
 
@@ -388,14 +409,123 @@ test('S17: a CRS name that is not UTF-8', () => {
   }
 });
 
-test('S18: the reserved VO bit', () => {
+test('S18: bit 47 of a VO is read as the deep flag (2.1)', () => {
+  // Bit 47 was reserved in 2.0; 2.1 reads it as the deep flag (FORMAT.md 3.1): the VO stands
+  // from ground_z0. The same bytes otherwise, and any minor (here the 2.0 example's 0).
   const d = docs()[0];
   const s = d.bytes.slice();
   s[voAt(d, 1) + 5] |= 0x80;
   fixStoreCrc(s);
-  const e = throwsFormat(() => Store.parse(s), 'ReservedVoBit', { cell: 0, vo: 1, offset: 0xac });
-  assert.equal(e.message, 'VO 1 of cell 0 at offset 172 sets the reserved bit 47');
-  throwsFormat(() => Store.parse(withVo(d, 0, new Array(6).fill(0xff))), 'ReservedVoBit', { cell: 0, vo: 0, offset: 0xa6 });
+  const st = Store.parse(s);
+  assert.equal(st.minor, 0);
+  const r = st.cell(0);
+  assert.deepEqual(r.vos.map((x) => x.deep), [false, true, false]);
+  assert.deepEqual(plain(r.vos[1]), { ...DOC_CELLS[0].vos[1], deep: true });
+  const g = /** @type {import('../src/frame.js').VoGeom} */ (st.frame.dequantize(0, r, r.vos[1]));
+  assert.equal(g.g, 160); // ground_z0, not the cell's 162
+  assert.equal(g.h, 506.9446951953614);
+  assert.equal(/** @type {import('../src/frame.js').VoGeom} */ (st.frame.dequantize(0, r, r.vos[0])).g, 162);
+  // Re-encoded by the tests' writer: the same bytes with minor 1, read back the same.
+  const again = encodeStore(docFrame(), [plain(r), DOC_CELLS[1], DOC_CELLS[2]], { objects: 2576, scene: 0x9e3779b97f4a7c15n, crs: 'EPSG:2154' });
+  assert.deepEqual([...again.subarray(8, 12)], [2, 0, 1, 0]);
+  assert.deepEqual(plain(Store.parse(again).cell(0)), plain(r));
+  // An all-ones VO is deep, canonical and degenerate (both ends (7, 511, 511)).
+  throwsFormat(() => Store.parse(withVo(d, 0, new Array(6).fill(0xff))), 'DegenerateVo', { cell: 0, vo: 0, offset: 0xa6 });
+  // A deep VO that is not canonical is refused as such (S19 after S18).
+  const nc = voBytes({ a: p(1, 226, 316), b: p(0, 336, 376), level: 5, deep: true }, 2);
+  assert.equal(nc[5] & 0x80, 0x80);
+  throwsFormat(() => Store.parse(withVo(d, 0, nc)), 'NonCanonicalVo', { cell: 0, vo: 0, offset: 0xa6, endpoint: 'a' });
+  // The 2.0 reader's refusal keeps Rust's message (this reader never throws it).
+  assert.equal(new FormatError('ReservedVoBit', { cell: 0, vo: 1, offset: 172 }).message, 'VO 1 of cell 0 at offset 172 sets the reserved bit 47');
+});
+
+// Section 13: version 2.1.
+
+test('doc 2.1 store example decodes as FORMAT.md 13 says', () => {
+  const bytes = docHex('store-2.1');
+  assert.equal(bytes.length, 179);
+  const s = Store.parse(bytes);
+  assert.deepEqual([s.major, s.minor, s.voBytes], [2, 1, 6]);
+  assert.deepEqual([s.objects, s.scene, s.crs, s.cellCount], [2576, 0x9e3779b97f4a7c15n, 'EPSG:2154', 3]);
+  assert.deepEqual({ ...s.frame }, { ...docFrame() });
+  for (let i = 0; i < 3; i++) assert.deepEqual(plain(s.cell(i)), DOC_CELLS_21[i]);
+  // Cell 0: its index byte and a record of ground, rise and two VOs.
+  assert.deepEqual([0, 1, 2].map((i) => s.cellBytes(i)), [1 + 14, 1, 1]);
+  assert.equal(bytes[0x9e], 12);
+  // The writer of the tests gives the same bytes, minor 1 included (it pins the layout).
+  assert.deepEqual(encodeStore(docFrame(), DOC_CELLS_21, { objects: 2576, scene: 0x9e3779b97f4a7c15n, crs: 'EPSG:2154' }), bytes);
+  // The same records without the rise and the deep bit are a 2.0 file.
+  const plain20 = [rec(4, DOC_CELLS_21[0].vos.map((x) => ({ ...x, deep: false }))), SKIPPED_CELL, EMPTY_CELL];
+  assert.deepEqual([...encodeStore(docFrame(), plain20).subarray(8, 12)], [2, 0, 0, 0]);
+});
+
+test('doc 2.1 worked figures: the rise raises the eyes and the tops, the deep VO stands from ground_z0', () => {
+  const f = docFrame();
+  const s = Store.parse(docHex('store-2.1'));
+  const r = s.cell(0);
+  assert.deepEqual([r.ground, r.rise], [4, 6]);
+  const view = /** @type {import('../src/frame.js').CellView} */ (f.cellView(0, r));
+  assert.deepEqual([view.e0, view.e1], [163.5, 167]);
+  assert.equal(f.topEye(r), 167);
+  assert.deepEqual(f.dequantize(0, r, r.vos[0]), { a: [20, 110], b: [90, 110], g: 162, h: 175.20703125 });
+  assert.deepEqual(f.dequantize(0, r, r.vos[1]), { a: [-198, 650], b: [402, 650], g: 160, h: 509.9446951953614 });
+  // A bare level has no rise: the 2.0 figures (section 9.1).
+  const bare = /** @type {import('../src/frame.js').CellView} */ (f.cellView(0, 4));
+  assert.deepEqual([bare.e0, bare.e1], [163.5, 164]);
+  assert.equal(/** @type {import('../src/frame.js').VoGeom} */ (f.dequantize(0, 4, r.vos[0])).h, 172.20703125);
+});
+
+test('doc 2.1 blob example decodes as FORMAT.md 13 says', () => {
+  const f = docFrame();
+  const b = docHex('blob-2.1-cell0');
+  assert.equal(b.length, 28);
+  assert.deepEqual(plain(decodeBlob(f, b)), { id: 0, record: DOC_CELLS_21[0] });
+  assert.deepEqual(encodeBlob(f, 0, DOC_CELLS_21[0]), b);
+  // The blob's count and record are the store's index byte and record.
+  assert.equal(b[9], docHex('store-2.1')[0x9e]);
+  assert.deepEqual(b.subarray(10, 24), docHex('store-2.1').subarray(0xa5, 0xb3));
+  assert.equal(crc32(b, 0, 24), 0x33326b41);
+});
+
+test('S22: a rise of 0, or a ground level plus rise over 255 (BadRise)', () => {
+  const good = docHex('store-2.1');
+  // Rise 0 at offset 0xa6, and ground 4 + rise 252 > 255.
+  for (const rise of [0, 252]) {
+    const e = throwsFormat(() => Store.parse(patched(good, 0xa6, [rise])), 'BadRise', { cell: 0, ground: 4, rise, offset: 0xa6 });
+    if (rise === 252) assert.equal(e.message, "cell 0's rise 252 at offset 166 is 0 or takes its ground level 4 past 255");
+  }
+  // The edges are accepted: 4 + 251 = 255, and rise 1.
+  for (const rise of [251, 1]) assert.equal(Store.parse(patched(good, 0xa6, [rise])).cell(0).rise, rise);
+  // Ground 255 leaves no rise at all.
+  throwsFormat(() => Store.parse(patched(good, 0xa5, [255])), 'BadRise', { cell: 0, ground: 255, rise: 6, offset: 0xa6 });
+  // Checked before the record's VOs (rise 0 and a degenerate VO 0: BadRise) ...
+  const both = patched(good, 0xa6, [0, 0, 0, 0, 0, 0, 0]);
+  throwsFormat(() => Store.parse(both), 'BadRise', { cell: 0, ground: 4, rise: 0, offset: 0xa6 });
+  // ... and in file order: a bad VO of an earlier cell comes first, a bad rise of an earlier
+  // cell before a bad VO of a later one.
+  const f = docFrame();
+  const degenerate = rec(4, [q([9, 9, 9, 9, 1])]);
+  const order = encodeStore(f, [degenerate, { ground: 3, rise: 7, vos: [q([196, 376, 336, 376, 5])] }, {}]);
+  order[149 + 3 + 4 + 1 + 6 + 1] = 0; // cell 1's rise byte
+  fixStoreCrc(order);
+  throwsFormat(() => Store.parse(order), 'DegenerateVo', { cell: 0, vo: 0, offset: 149 + 3 + 4 + 1 });
+  const order2 = encodeStore(f, [{ ground: 3, rise: 7, vos: [q([196, 376, 336, 376, 5])] }, degenerate, {}]);
+  order2[149 + 3 + 4 + 1] = 0; // cell 0's rise byte
+  fixStoreCrc(order2);
+  throwsFormat(() => Store.parse(order2), 'BadRise', { cell: 0, ground: 3, rise: 0, offset: 149 + 3 + 4 + 1 });
+  // A cell on ground 4 with a rise of 6 after a cell with a rise: the block table and the
+  // lookup count the rise bytes (cells 70 and 3 on a grid of 100, two blocks).
+  const big = docFrame();
+  big.nx = 100;
+  const cells = Array.from({ length: 100 }, () => EMPTY_CELL);
+  cells[3] = DOC_CELLS_21[0];
+  cells[70] = DOC_CELLS_21[0];
+  const st = Store.parse(encodeStore(big, cells));
+  assert.equal(st.minor, 1);
+  assert.deepEqual(plain(st.cell(70)), DOC_CELLS_21[0]);
+  assert.deepEqual(plain(st.cell(3)), DOC_CELLS_21[0]);
+  const table = 149 + 100;
+  assert.deepEqual([...encodeStore(big, cells).subarray(table, table + 8)], [0, 0, 0, 0, 14, 0, 0, 0]);
 });
 
 test('S19: a non-canonical endpoint, before degeneracy, first in file order', () => {
@@ -421,7 +551,10 @@ test('B1 to B13: the blob rules, in order, on both majors', () => {
     for (const k of [0, 5, 13]) throwsFormat(() => decodeBlob(f, b.subarray(0, k)), 'Truncated', { needed: 14, got: k });
     throwsFormat(() => decodeBlob(f, patched(b, 0, [0x57], false)), 'BadMagic');
     for (const m of [0, 3, 255]) throwsFormat(() => decodeBlob(f, patched(b, 4, [m], false)), 'UnsupportedVersion', { major: m });
-    for (const value of [11, 254]) throwsFormat(() => decodeBlob(f, patched(b, 9, [value], false)), 'BadIndexByte', { cell: 0, value, offset: 9 });
+    // B4: 11..=20 announce a rise byte in 2.1 (section 13): reserved in 1.0 only.
+    for (const value of major === 1 ? [11, 20, 21, 254] : [21, 254]) {
+      throwsFormat(() => decodeBlob(f, patched(b, 9, [value], false)), 'BadIndexByte', { cell: 0, value, offset: 9 });
+    }
     throwsFormat(() => decodeBlob(f, b.subarray(0, n - 1)), 'Truncated', { needed: n, got: n - 1 });
     const long = new Uint8Array(n + 1);
     long.set(b);
@@ -444,15 +577,49 @@ test('B1 to B13: the blob rules, in order, on both majors', () => {
     }
     assert.equal(vb, major === 2 ? 6 : 5);
   }
-  // B11, B12 (2.0).
+  // B11 (2.1): bit 47 is the deep flag; B12 (2.0).
   const b = docHex('blob-cell0');
   const r = b.slice();
-  r[11 + 6 + 5] |= 0x80;
+  r[0x17 + 5] |= 0x80; // bit 47 of VO 2
   fixBlobCrc(r);
-  throwsFormat(() => decodeBlob(f, r), 'ReservedVoBit', { cell: 0, vo: 1, offset: 17 });
+  const deep = decodeBlob(f, r).record;
+  assert.deepEqual(deep.vos.map((x) => x.deep), [false, false, true]);
+  assert.deepEqual(plain(deep), plain({ ...DOC_CELLS[0], vos: [DOC_CELLS[0].vos[0], DOC_CELLS[0].vos[1], { ...DOC_CELLS[0].vos[2], deep: true }] }));
   const nc = patched(b, 11, voBytes({ a: p(1, 226, 316), b: p(0, 336, 376), level: 5 }, 2), false);
   fixBlobCrc(nc);
   throwsFormat(() => decodeBlob(f, nc), 'NonCanonicalVo', { cell: 0, vo: 0, offset: 11, endpoint: 'a' });
+});
+
+test('B4, B5, B6, B14: the 2.1 blob (a count with a rise, its length, its rise)', () => {
+  const f = docFrame();
+  const b = docHex('blob-2.1-cell0');
+  const n = b.length;
+  // B5, B6: the length is 14 + 6n + 2 with a rise byte.
+  throwsFormat(() => decodeBlob(f, b.subarray(0, n - 1)), 'Truncated', { needed: n, got: n - 1 });
+  const long = new Uint8Array(n + 1);
+  long.set(b);
+  throwsFormat(() => decodeBlob(f, long), 'TrailingBytes', { expected: n, got: n + 1 });
+  // A 2.0 blob's count raised by 10: one byte short of its rise.
+  const b0 = docHex('blob-cell0');
+  throwsFormat(() => decodeBlob(f, patched(b0, 9, [13], false)), 'Truncated', { needed: b0.length + 1, got: b0.length });
+  // B14: rise 0 at offset 11, and ground + rise past 255.
+  for (const [ground, rise] of [[4, 0], [4, 252], [255, 1]]) {
+    const bad = patched(b, 10, [ground, rise], false);
+    fixBlobCrc(bad);
+    throwsFormat(() => decodeBlob(f, bad), 'BadRise', { cell: 0, ground, rise, offset: 11 });
+  }
+  const edge = patched(b, 10, [4, 251], false);
+  fixBlobCrc(edge);
+  assert.equal(decodeBlob(f, edge).record.rise, 251);
+  // B4: without ground bytes (flat ground), 11..=20 are refused.
+  const flat = docFrame();
+  flat.groundStep = 0;
+  throwsFormat(() => decodeBlob(flat, b), 'BadIndexByte', { cell: 0, value: 12, offset: 9 });
+  // B8 before B14: an id outside the grid is named first.
+  const out = patched(b, 5, u32(3), false);
+  out[11] = 0;
+  fixBlobCrc(out);
+  throwsFormat(() => decodeBlob(f, out), 'CellOutOfGrid', { id: 3, cells: 3 });
 });
 
 test('VO tops power as Rust does, hypot has glibc bits on pinned values', () => {

@@ -1,7 +1,7 @@
 // @ts-check
 /**
  * What the tests share: FORMAT.md's hex examples (read from the document, as tests/format.rs
- * reads them), a writer of 2.0 and 1.0 stores and blobs (the runtime reads only; the tests
+ * reads them), a writer of 2.0 (and 2.1) and 1.0 stores and blobs (the runtime reads only; the tests
  * build inputs with this), and the paths of the Rust binaries the cross-checks run.
  *
  * The Rust side: $VOCC_BIN (default target/debug/vocc), $VOCC_ORACLE (default
@@ -54,8 +54,8 @@ export function docFrame() {
 }
 
 /**
- * A VO's stored bytes in `major`.
- * @param {{a: {e: number, x: number, y: number}, b: {e: number, x: number, y: number}, level: number}} q
+ * A VO's stored bytes in `major` (in 2.x, bit 47 set for a deep VO of 2.1).
+ * @param {{a: {e: number, x: number, y: number}, b: {e: number, x: number, y: number}, level: number, deep?: boolean}} q
  * @param {number} major
  */
 export function voBytes(q, major) {
@@ -64,35 +64,52 @@ export function voBytes(q, major) {
     return Array.from({ length: 5 }, (_, k) => Number((w >> BigInt(8 * k)) & 0xffn));
   }
   const p = (/** @type {{e: number, x: number, y: number}} */ e) => BigInt(e.e | (e.x << 3) | (e.y << 12));
-  const w = p(q.a) | (p(q.b) << 21n) | (BigInt(q.level) << 42n);
+  const w = p(q.a) | (p(q.b) << 21n) | (BigInt(q.level) << 42n) | (q.deep ? 1n << 47n : 0n);
   return Array.from({ length: 6 }, (_, k) => Number((w >> BigInt(8 * k)) & 0xffn));
 }
 
-/** @typedef {{skipped?: boolean, ground?: number, vos?: any[]}} Rec */
+/** @typedef {{skipped?: boolean, ground?: number, rise?: number, vos?: any[]}} Rec */
 
 /**
- * A record's payload bytes.
+ * A record's payload bytes: the ground byte (with ground bytes), the rise byte (2.1, a rise
+ * above 0), the VOs.
  * @param {Frame} f @param {Rec} r @param {number} major
  */
 function recordBytes(f, r, major) {
   const vos = r.vos ?? [];
   if (r.skipped || vos.length === 0) return [];
   const out = f.perCellGround() ? [r.ground ?? 0] : [];
+  if (r.rise) out.push(r.rise);
   for (const q of vos) out.push(...voBytes(q, major));
   return out;
 }
 
-/** @param {Rec} r */
-const indexByte = (r) => (r.skipped ? 255 : (r.vos ?? []).length);
+/**
+ * A record's index value: 255 skipped, the VO count, or 10 + the count with a rise (2.1).
+ * @param {Rec} r
+ */
+const indexByte = (r) => {
+  if (r.skipped) return 255;
+  const n = (r.vos ?? []).length;
+  return r.rise && n > 0 ? 10 + n : n;
+};
 
 /**
- * A store file of `major` (2 or 1) holding `cells` (no checks: it writes what it is given).
+ * Whether the records use 2.1 (a rise or a deep VO): the minor a writer gives them.
+ * @param {Rec[]} cells
+ */
+export const minorOf = (cells) => (cells.some((r) => (r.rise ?? 0) > 0 || (r.vos ?? []).some((q) => q.deep)) ? 1 : 0);
+
+/**
+ * A store file of `major` (2 or 1) holding `cells` (no checks: it writes what it is given),
+ * with the minor a 2.x writer gives them (1 with a rise or a deep VO, else 0) unless given.
  * @param {Frame} f
  * @param {Rec[]} cells
- * @param {{major?: number, objects?: number, scene?: bigint, crs?: string}} [opt]
+ * @param {{major?: number, minor?: number, objects?: number, scene?: bigint, crs?: string}} [opt]
  */
 export function encodeStore(f, cells, opt = {}) {
   const major = opt.major ?? 2;
+  const minor = opt.minor ?? (major === 2 ? minorOf(cells) : 0);
   /** @type {number[]} */
   const index = [];
   /** @type {number[]} */
@@ -104,7 +121,7 @@ export function encodeStore(f, cells, opt = {}) {
     index.push(indexByte(r));
     payload.push(...recordBytes(f, r, major));
   });
-  const out = [0x89, 0x56, 0x4f, 0x43, 0x43, 0x0d, 0x0a, 0x1a, major, 0, 0, 0, 0, 0, 0, 0];
+  const out = [0x89, 0x56, 0x4f, 0x43, 0x43, 0x0d, 0x0a, 0x1a, major, 0, minor & 0xff, minor >> 8, 0, 0, 0, 0];
   out.push(...encodeFrame(f), ...u32(payload.length), 0, 0, 0, 0);
   if (major === 2) {
     const crs = new TextEncoder().encode(opt.crs ?? '');

@@ -310,7 +310,7 @@ function selectCell(id) {
     const quads = [];
     const edges = [];
     for (const q of rec.vos) {
-      const g = frame.dequantize(id, rec.ground, q);
+      const g = frame.dequantize(id, rec, q);
       if (!g) continue;
       const [a, b] = [g.a, g.b];
       quads.push(a[0], a[1], g.g, b[0], b[1], g.g, b[0], b[1], g.h, a[0], a[1], g.g, b[0], b[1], g.h, a[0], a[1], g.h);
@@ -385,7 +385,7 @@ const walk = { on: false, x: 0, y: 0, heading: Math.PI / 2 };
 function placeWalker() {
   const id = frame.cellAt(walk.x, walk.y);
   const rec = id === null ? null : store.cell(id);
-  const z = frame.groundZ(rec ? rec.ground : 0) + frame.eyeHi;
+  const z = frame.topEye(rec ?? 0);
   camera.position.set(walk.x, walk.y, z);
   camera.lookAt(walk.x + Math.cos(walk.heading), walk.y + Math.sin(walk.heading), z);
   if (id !== state.cell) selectCell(id);
