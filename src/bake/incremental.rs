@@ -60,7 +60,7 @@ pub struct CellHashes {
 }
 
 /// Why a `.hashes` file was refused.
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq, Eq)]
 pub enum HashesError {
     #[error("not a vocc hashes file (bad magic)")]
     Magic,

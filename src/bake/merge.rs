@@ -40,7 +40,7 @@ pub struct Merged {
 }
 
 /// Why shards were refused. `shard`, `first` and `second` are positions in the input slice.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq)]
 pub enum MergeError {
     #[error("no shards to merge")]
     NoShards,
