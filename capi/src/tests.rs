@@ -6,8 +6,13 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::ffi::CStr;
 
-use vocc::runtime::format::{encode_blob, encode_store, encode_store_with, SceneSection};
+use vocc::runtime::format::{
+    encode_blob, encode_store, encode_store_with, CellRecord, SceneSection,
+};
+use vocc::runtime::frame::QPoint;
+use vocc::runtime::{Frame, GridDescriptor, QVo};
 
+use super::boundary::report;
 use super::*;
 
 struct Counting;
@@ -16,20 +21,25 @@ thread_local! {
     static ALLOCS: Cell<u64> = const { Cell::new(0) };
 }
 
+// SAFETY: every method forwards to the system allocator with its own arguments, so the GlobalAlloc contract holds as it does for `System`.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
         let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        // SAFETY: the caller's arguments, under GlobalAlloc's contract, passed on unchanged.
         unsafe { System.alloc(l) }
     }
     unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
         let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        // SAFETY: the caller's arguments, under GlobalAlloc's contract, passed on unchanged.
         unsafe { System.alloc_zeroed(l) }
     }
     unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
         let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        // SAFETY: the caller's arguments, under GlobalAlloc's contract, passed on unchanged.
         unsafe { System.realloc(p, l, n) }
     }
     unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        // SAFETY: the caller's arguments, under GlobalAlloc's contract, passed on unchanged.
         unsafe { System.dealloc(p, l) }
     }
 }
@@ -177,6 +187,7 @@ impl Fixture {
             boxes,
         };
         let mut e = blank_error();
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         unsafe {
             assert_eq!(
                 vocc_store_open(f.bytes.as_ptr(), f.bytes.len(), &mut f.store, &mut e),
@@ -202,6 +213,7 @@ impl Fixture {
     fn cell(&self, id: u32) -> VoccCell {
         let mut c = VoccCell::default();
         assert_eq!(
+            // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
             unsafe { vocc_store_cell(self.store, id, &mut c, ptr::null_mut()) },
             VOCC_OK
         );
@@ -211,6 +223,7 @@ impl Fixture {
 
 impl Drop for Fixture {
     fn drop(&mut self) {
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         unsafe {
             vocc_query_free(self.query);
             vocc_tree_free(self.tree);
@@ -224,7 +237,9 @@ fn pvs_equals_the_rust_culler_for_every_cell_as_ids_and_bitmap() {
     let fx = Fixture::new();
     let f = frame();
     assert_eq!(fx.frame, VoccFrame::from(&f));
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     assert_eq!(unsafe { vocc_store_cell_count(fx.store) }, 25);
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     assert_eq!(unsafe { vocc_tree_len(fx.tree) }, fx.boxes.len());
     let tree = BoxTree::new(&fx.boxes);
     let recs = records();
@@ -239,6 +254,7 @@ fn pvs_equals_the_rust_culler_for_every_cell_as_ids_and_bitmap() {
         some_culled |= want.len() < fx.boxes.len();
         let mut n = 0;
         let mut e = blank_error();
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         let st = unsafe {
             vocc_pvs(
                 fx.query,
@@ -255,12 +271,14 @@ fn pvs_equals_the_rust_culler_for_every_cell_as_ids_and_bitmap() {
         assert_eq!((st, e.code), (VOCC_OK, VOCC_OK));
         assert_eq!(&ids[..n], &want[..], "cell {id}");
         let mut m = 0;
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         let (p, got) = unsafe {
             let p = vocc_query_ids(fx.query, &mut m);
             (p, std::slice::from_raw_parts(p, m))
         };
         assert!(!p.is_null());
         assert_eq!(got, &want[..]);
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         let st = unsafe {
             vocc_pvs_bitmap(
                 fx.query,
@@ -285,6 +303,7 @@ fn pvs_equals_the_rust_culler_for_every_cell_as_ids_and_bitmap() {
     // The two invalid boxes are in every PVS.
     let cell = fx.cell(12);
     let mut n = 0;
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     unsafe {
         vocc_pvs(
             fx.query,
@@ -323,6 +342,7 @@ fn world_boxes_with_the_origin_give_the_local_result() {
     let mut e = blank_error();
     let rust = BoxTree::from_world(&world, o);
     assert_eq!(
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         unsafe {
             vocc_tree_new(
                 world.as_ptr().cast(),
@@ -339,6 +359,7 @@ fn world_boxes_with_the_origin_give_the_local_result() {
     pvs(&frame(), 12, &records()[12], &rust, &mut want);
     let mut n = 0;
     let mut ids = vec![0u32; world.len()];
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     let st = unsafe {
         vocc_pvs(
             fx.query,
@@ -355,6 +376,7 @@ fn world_boxes_with_the_origin_give_the_local_result() {
     assert_eq!(st, VOCC_OK);
     assert_eq!(&ids[..n], &want[..]);
     assert!(n < world.len());
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     unsafe { vocc_tree_free(t) };
 }
 
@@ -362,6 +384,7 @@ fn world_boxes_with_the_origin_give_the_local_result() {
 fn cell_at_and_rect_follow_the_grid() {
     let fx = Fixture::new();
     let mut id = 99;
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     unsafe {
         assert_eq!(vocc_cell_at(&fx.frame, 250.0, 250.0, &mut id), VOCC_OK);
         assert_eq!(id, 12);
@@ -411,6 +434,7 @@ fn blobs_and_frames_decode_like_the_store() {
         ..frame()
     });
     let mut e = blank_error();
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     unsafe {
         assert_eq!(
             vocc_frame_decode(frame_bytes.as_ptr(), frame_bytes.len(), &mut fr, &mut e),
@@ -426,6 +450,7 @@ fn blobs_and_frames_decode_like_the_store() {
     for (id, rec) in records().iter().enumerate() {
         let blob = encode_blob(&f, id as u32, rec).unwrap();
         let (mut got_id, mut cell) = (0u32, VoccCell::default());
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         let st = unsafe {
             vocc_blob_decode(
                 &fr,
@@ -442,6 +467,7 @@ fn blobs_and_frames_decode_like_the_store() {
     let mut blob = encode_blob(&f, 12, &records()[12]).unwrap();
     blob[12] ^= 1;
     let (mut got_id, mut cell) = (0u32, VoccCell::default());
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     let st = unsafe {
         vocc_blob_decode(
             &fr,
@@ -478,6 +504,7 @@ fn a_1_0_store_and_blob_read_as_2_0_ones_and_the_store_info() {
         crs_len: 9,
         crs: [b'x' as c_char; VOCC_CRS_LEN],
     };
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     unsafe {
         assert_eq!(
             vocc_store_open(v1.as_ptr(), v1.len(), &mut s, &mut e),
@@ -613,12 +640,14 @@ fn bad_stores_are_refused_with_the_rule_and_a_null_store() {
         ),
     ];
     for (bytes, code, text) in cases {
+        // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
         let st = unsafe { vocc_store_open(bytes.as_ptr(), bytes.len(), &mut s, &mut e) };
         assert_eq!((st, e.code), (code, code), "{text}");
         assert!(msg(&e).starts_with(text), "{} vs {text}", msg(&e));
         assert!(s.is_null(), "the out-pointer is NULL on failure");
     }
     // A NULL byte pointer with a length, and an empty store.
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     unsafe {
         assert_eq!(
             vocc_store_open(ptr::null(), 10, &mut s, &mut e),
@@ -647,6 +676,7 @@ fn null_pointers_and_bad_arguments_give_statuses_not_crashes() {
     let mut n = 0usize;
     let mut ids = vec![0u32; fx.boxes.len()];
     let mut e = blank_error();
+    // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
     unsafe {
         assert_eq!(
             vocc_store_frame(ptr::null(), ptr::null_mut()),
@@ -974,6 +1004,7 @@ fn the_culling_path_allocates_nothing() {
                 let mut got = 0;
                 let mut count = 0;
                 let mut pos = 0;
+                // SAFETY: every pointer passed is NULL where the function allows it, a live object of this test (made by the library, not yet freed), or a buffer of this test of the length passed.
                 unsafe {
                     let r = fx.frame.min_x + (id % 5) as f64 * 100.0 + 50.0;
                     let s = fx.frame.min_y + (id / 5) as f64 * 100.0 + 50.0;
@@ -1035,7 +1066,9 @@ fn panics_are_caught_at_the_boundary() {
     let mut e = blank_error();
     let prev = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
-    let st = guard(&mut e, || panic!("boom"));
+    let r = guard(|| panic!("boom"));
+    // SAFETY: `e` is a live, writable VoccError that nothing else uses.
+    let st = unsafe { finish(&mut e, r) };
     std::panic::set_hook(prev);
     assert_eq!((st, e.code), (VOCC_ERR_PANIC, VOCC_ERR_PANIC));
     assert_eq!(msg(&e), "internal error: boom");
@@ -1044,8 +1077,10 @@ fn panics_are_caught_at_the_boundary() {
 #[test]
 fn long_messages_are_cut_at_a_character_boundary() {
     let mut e = blank_error();
-    let long = "é".repeat(200); // 400 bytes
-    report(&mut e, VOCC_ERR_FORMAT, &long);
+    // 400 bytes.
+    let long = "é".repeat(200);
+    // SAFETY: `e` is a live, writable VoccError that nothing else uses.
+    unsafe { report(&mut e, VOCC_ERR_FORMAT, &long) };
     let m = msg(&e);
     assert_eq!(m.len(), 254, "255 would split a character");
     assert!(long.starts_with(&m));

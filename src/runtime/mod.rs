@@ -58,7 +58,7 @@ pub mod occlusion;
 pub use culler::{pvs, BoxTree};
 pub use format::{
     decode_blob, decode_frame, encode_blob, encode_frame, encode_store, encode_store_with,
-    validate_frame, CellRecord, FormatError, SceneSection, Store, VoList,
+    validate_frame, CellRecord, FormatError, OwnedStore, SceneSection, Store, VoList,
 };
 pub use frame::{CellView, Frame, QPoint, QVo, VoGeom, MAX_VOS_PER_CELL};
 pub use grid::{CellId, GridDescriptor};
