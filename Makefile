@@ -61,8 +61,10 @@ scale:
 eval:
 	$(CARGO) run --locked --release -- results -o docs/RESULTS.md
 
+# Clippy on every workspace member: the library, the CLI (cli/), the C ABI (capi/, where every
+# unsafe block must carry a SAFETY comment), the Python binding (python/) and the benchmarks.
 lint:
-	$(CARGO) clippy --locked --all-targets -p vocc -p vocc-bench -- -D warnings
+	$(CARGO) clippy --locked --workspace --all-targets -- -D warnings
 
 # Clones the committed main into a temporary folder and runs the README's two commands there.
 fresh-clone:

@@ -306,7 +306,7 @@ mod tests {
         let b = shard(1, 2, [e, wall(200)], [0, 6]);
         assert_eq!(merge(&[]), Err(MergeError::NoShards));
         assert_eq!(
-            merge(&inputs(&[a.clone()])),
+            merge(&inputs(std::slice::from_ref(&a))),
             Err(MergeError::Missing {
                 missing: vec![1],
                 count: 2
