@@ -473,6 +473,8 @@ pub(super) fn widen(bin: &[BinNode]) -> Vec<Node> {
     out
 }
 
+// The bake's weighing walk (`bake::occludees`): unused by the runtime alone.
+#[cfg_attr(not(feature = "bake"), allow(dead_code))]
 impl BoxTree {
     /// The object at tree position `pos` (positions run over the valid boxes, each subtree a
     /// contiguous range).
