@@ -351,7 +351,7 @@ def test_merge_of_cli_shards_gives_the_single_bake(tmp_path):
     """`vocc.merge` is the library's merge (`vocc::bake::merge`): two shards baked by the CLI
     merge into the CLI's single bake, byte for byte, hashes included; a missing shard is refused
     by name."""
-    region = ["--height-attr", "HAUTEUR", "--region", ",".join(str(v) for v in SMALL), "--effort", "fast"]
+    region = ["--height-attr", "HAUTEUR", "--region", REGION_ARG, "--effort", "fast"]
     whole = tmp_path / "whole.vocc"
     cli("bake", str(LYON), *region, "-o", str(whole))
     shards = []
