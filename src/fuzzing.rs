@@ -20,7 +20,7 @@
 //! - walkable: every ring has at least 3 finite points;
 //! - hashes (a `.hashes` file): an accepted version-2 file re-encodes to the same bytes, and an
 //!   accepted shard's index is below its count;
-//! - merge (shards of one bake, [`merge_shards`] splits the input): a merged store parses, has
+//! - merge (shards of one bake, `merge_shards` splits the input): a merged store parses, has
 //!   the shards' cell count, holds every shard's nonempty records and nothing else, carries
 //!   hashes of itself that round-trip, and one shard of each index was given.
 //!

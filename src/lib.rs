@@ -8,7 +8,7 @@
 //!
 //! ## Where to start
 //! - **Bake** a store: [`BakeJob`] (`vocc::bake::job::BakeJob`), over a scene from
-//!   [`scene::load`] and [`bake::params::BakeParams`]; it returns the store's bytes, its
+//!   [`scene::load()`] and [`bake::params::BakeParams`]; it returns the store's bytes, its
 //!   `.hashes` bytes and a summary, and does no file I/O. Shards of one bake merge with
 //!   [`bake::merge::merge`].
 //! - **Read** a store: [`runtime::Store`] borrows the file's bytes, [`runtime::OwnedStore`] keeps

@@ -159,10 +159,10 @@ pub(super) fn centre(b: &[f64; 6], axis: usize) -> f64 {
 }
 
 impl BoxTree {
-    /// Builds the hierarchy over `boxes` (local frame), leaves of at most [`LEAF_SIZE`] boxes.
-    /// A node's boxes are split by [`binned_split`] (the least cost of groups that umbras'
-    /// edges cross) in its first [`BINNED_LEVELS`] binary levels, else at the median of their
-    /// keys ([`centre`]: x, y, and the top weighted by [`TOP_WEIGHT`]) along the longest extent.
+    /// Builds the hierarchy over `boxes` (local frame), leaves of at most `LEAF_SIZE` (8) boxes.
+    /// A node's boxes are split by `binned_split` (the least cost of groups that umbras'
+    /// edges cross) in its first `BINNED_LEVELS` binary levels, else at the median of their
+    /// keys (`centre`: x, y, and the top weighted by `TOP_WEIGHT`) along the longest extent.
     ///
     /// # Panics
     /// With more than [`MAX_BOXES`] boxes (the C and Python bindings refuse them first).
