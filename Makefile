@@ -16,7 +16,7 @@ build:
 test:
 	$(CARGO) test --locked
 	$(CARGO) test --locked --no-default-features -p vocc -p vocc-capi --lib --test header
-	@deps="$$($(CARGO) tree --locked --no-default-features -e normal --depth 1 --prefix none | awk 'NR > 1 {print $$1}' | sort -u | tr '\n' ' ')"; \
+	@deps="$$($(CARGO) tree --locked --no-default-features -p vocc -e normal --depth 1 --prefix none | awk 'NR > 1 {print $$1}' | sort -u | tr '\n' ' ')"; \
 	  test "$$deps" = "thiserror " || { echo "runtime dependencies: $$deps(ARCHITECTURE.md invariant 9 allows thiserror alone)" >&2; exit 1; }
 	CARGO="$(CARGO)" examples/c/test.sh
 	CARGO="$(CARGO)" python/test.sh
