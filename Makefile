@@ -16,7 +16,7 @@ build:
 test:
 	$(CARGO) test --locked
 	$(CARGO) test --locked --no-default-features -p vocc -p vocc-capi --lib --test header
-	@deps="$$($(CARGO) tree --locked --no-default-features -e normal --depth 1 --prefix none | awk 'NR > 1 {print $$1}' | sort -u | tr '\n' ' ')"; \
+	@deps="$$($(CARGO) tree --locked --no-default-features -p vocc -e normal --depth 1 --prefix none | awk 'NR > 1 {print $$1}' | sort -u | tr '\n' ' ')"; \
 	  test "$$deps" = "thiserror " || { echo "runtime dependencies: $$deps(ARCHITECTURE.md invariant 9 allows thiserror alone)" >&2; exit 1; }
 	CARGO="$(CARGO)" examples/c/test.sh
 	CARGO="$(CARGO)" python/test.sh
@@ -61,8 +61,10 @@ scale:
 eval:
 	$(CARGO) run --locked --release -- results -o docs/RESULTS.md
 
+# Clippy on every workspace member: the library, the CLI (cli/), the C ABI (capi/, where every
+# unsafe block must carry a SAFETY comment), the Python binding (python/) and the benchmarks.
 lint:
-	$(CARGO) clippy --locked --all-targets -p vocc -p vocc-bench -- -D warnings
+	$(CARGO) clippy --locked --workspace --all-targets -- -D warnings
 
 # Clones the committed main into a temporary folder and runs the README's two commands there.
 fresh-clone:

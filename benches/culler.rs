@@ -26,7 +26,7 @@ fn bench_scene(c: &mut Criterion, name: &str, s: &Scene, cell_size: f64, region:
         region,
         ..BakeParams::default()
     };
-    let bytes = bake(s, params, None).bytes;
+    let bytes = bake(s, params, None).expect("the bake runs").bytes;
     let store = Store::parse(&bytes).unwrap();
     // The scene's local frame is the store's: both come from the same load.
     let tree = BoxTree::new(&object_boxes(s));

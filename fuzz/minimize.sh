@@ -9,7 +9,7 @@
 # fuzz/corpus.full/<target>/ (ignored by git). Needs the targets built (`fuzz/run.sh` builds them).
 set -eu
 cd "$(dirname "$0")"
-targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq}
+targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq dem hashes merge}
 bin=target/$(rustc +nightly -vV | sed -n 's/^host: //p')/release
 export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_odr_violation=0"  # as in run.sh
 for t in $targets; do

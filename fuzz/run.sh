@@ -11,7 +11,7 @@ set -u
 cd "$(dirname "$0")"
 secs=${1:-600}
 [ $# -gt 0 ] && shift
-targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq dem}
+targets=${*:-store blob geojson cityjson obj walkable osm gpkg fgb shp citygml cityjsonseq dem hashes merge}
 cargo +nightly fuzz build || exit 2
 bin=target/$(rustc +nightly -vV | sed -n 's/^host: //p')/release
 mkdir -p logs

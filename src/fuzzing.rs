@@ -17,7 +17,12 @@
 //! - scene: object indices follow input order, boxes are finite and not empty, every blocker is
 //!   a strictly convex counter-clockwise polygon or a 2-vertex wall, with finite coordinates
 //!   and `base < top`;
-//! - walkable: every ring has at least 3 finite points.
+//! - walkable: every ring has at least 3 finite points;
+//! - hashes (a `.hashes` file): an accepted version-2 file re-encodes to the same bytes, and an
+//!   accepted shard's index is below its count;
+//! - merge (shards of one bake, `merge_shards` splits the input): a merged store parses, has
+//!   the shards' cell count, holds every shard's nonempty records and nothing else, carries
+//!   hashes of itself that round-trip, and one shard of each index was given.
 //!
 //! Runtime targets build with `--no-default-features`; scene targets need the `bake` feature.
 
@@ -253,7 +258,137 @@ fn check_culler(f: &Frame, id: CellId, rec: &CellRecord) {
 }
 
 #[cfg(feature = "bake")]
+pub use bake_targets::*;
+#[cfg(feature = "bake")]
 pub use scene_targets::*;
+
+#[cfg(feature = "bake")]
+mod bake_targets {
+    use crate::bake::incremental::{CellHashes, HashesError};
+    use crate::bake::merge::{merge, MergeError, ShardBytes};
+    use crate::runtime::crc::crc32;
+    use crate::runtime::format::{CellRecord, Store, HEADER_LEN};
+
+    /// Fuzz target `hashes`: [`CellHashes::decode`], then the same on the input with its
+    /// trailing checksum made right. Returns the first result, the number of cells.
+    pub fn hashes(data: &[u8]) -> Result<usize, HashesError> {
+        let first = hashes_once(data);
+        if let Some(body) = data.len().checked_sub(4).map(|n| &data[..n]) {
+            let mut fixed = body.to_vec();
+            fixed.extend_from_slice(&crc32(body).to_le_bytes());
+            if fixed != data {
+                let _ = hashes_once(&fixed);
+            }
+        }
+        first
+    }
+
+    fn hashes_once(data: &[u8]) -> Result<usize, HashesError> {
+        let h = CellHashes::decode(data)?;
+        if data[8] == 2 {
+            assert_eq!(
+                h.encode(),
+                data,
+                "a version-2 hashes file re-encodes to its bytes"
+            );
+        }
+        if let Some((i, n)) = h.shard {
+            assert!(i < n, "shard {i} of {n} accepted");
+        }
+        Ok(h.cells.len())
+    }
+
+    /// The merge target's input as shards: the first byte gives their number (1 to 4), then
+    /// each is a `u16` length and a store's bytes, a `u16` length and a `.hashes` file's bytes
+    /// (little-endian; cut short where the input ends).
+    pub fn merge_shards(data: &[u8]) -> Vec<(Vec<u8>, Vec<u8>)> {
+        let Some((&k, mut rest)) = data.split_first() else {
+            return Vec::new();
+        };
+        let mut take = || {
+            let n = match rest {
+                [a, b, ..] => u16::from_le_bytes([*a, *b]) as usize,
+                _ => 0,
+            };
+            let r = rest.get(2..).unwrap_or(&[]);
+            let (part, tail) = r.split_at(n.min(r.len()));
+            rest = tail;
+            part.to_vec()
+        };
+        (0..1 + k % 4).map(|_| (take(), take())).collect()
+    }
+
+    /// The inverse of [`merge_shards`], for seeds.
+    pub fn merge_input(shards: &[(&[u8], &[u8])]) -> Vec<u8> {
+        let mut out = vec![(shards.len() as u8).wrapping_sub(1)];
+        for (s, h) in shards {
+            for part in [s, h] {
+                out.extend_from_slice(&(part.len() as u16).to_le_bytes());
+                out.extend_from_slice(part);
+            }
+        }
+        out
+    }
+
+    /// Fuzz target `merge`: [`merge`] on the shards of [`merge_shards`], then again with every
+    /// store's checksum made right and every hashes file pointed at its store (its store
+    /// checksum and its own checksum made right), so mutations reach the merge's own rules.
+    /// Returns the first result, the merged store's length.
+    pub fn merge_target(data: &[u8]) -> Result<usize, MergeError> {
+        let mut shards = merge_shards(data);
+        let first = merge_once(&shards);
+        for (s, h) in &mut shards {
+            if s.len() >= HEADER_LEN {
+                s[132..136].fill(0);
+                let crc = crc32(s);
+                s[132..136].copy_from_slice(&crc.to_le_bytes());
+            }
+            if h.len() >= 24 {
+                h[16..20].copy_from_slice(&crc32(s).to_le_bytes());
+                let n = h.len() - 4;
+                let crc = crc32(&h[..n]);
+                h[n..].copy_from_slice(&crc.to_le_bytes());
+            }
+        }
+        let _ = merge_once(&shards);
+        first
+    }
+
+    fn merge_once(shards: &[(Vec<u8>, Vec<u8>)]) -> Result<usize, MergeError> {
+        let given: Vec<ShardBytes> = shards
+            .iter()
+            .map(|(store, hashes)| ShardBytes { store, hashes })
+            .collect();
+        let m = merge(&given)?;
+        let out = Store::parse(&m.store).expect("the merged store parses");
+        let parts: Vec<Store> = shards
+            .iter()
+            .map(|(s, _)| Store::parse(s).expect("a merged shard parses"))
+            .collect();
+        assert_eq!(m.count as usize, shards.len(), "one shard of each index");
+        assert_eq!(m.cells_from.len(), shards.len());
+        assert_eq!(out.cell_count(), parts[0].cell_count());
+        for id in 0..out.cell_count() {
+            let r = out.cell(id).expect("a merged cell reads");
+            let mut from = 0;
+            for p in &parts {
+                let q = p.cell(id).expect("a merged shard's cell reads");
+                if q != CellRecord::EMPTY {
+                    assert_eq!(q, r, "cell {id}: a shard's record is kept");
+                    from += 1;
+                }
+            }
+            assert!(
+                from > 0 || r == CellRecord::EMPTY,
+                "cell {id}: from no shard"
+            );
+        }
+        assert_eq!(m.hashes.store_crc, crc32(&m.store));
+        assert_eq!(m.hashes.shard, None);
+        assert_eq!(CellHashes::decode(&m.hashes.encode()), Ok(m.hashes.clone()));
+        Ok(m.store.len())
+    }
+}
 
 #[cfg(feature = "bake")]
 mod scene_targets {

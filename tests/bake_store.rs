@@ -26,7 +26,7 @@ fn store_bytes(s: &Scene, threads: usize) -> Vec<u8> {
         .num_threads(threads)
         .build()
         .unwrap();
-    pool.install(|| bake(s, params, None).bytes)
+    pool.install(|| bake(s, params, None).expect("the bake runs").bytes)
 }
 
 #[test]
@@ -53,7 +53,7 @@ fn stored_vos_of_the_growth_generator_pass_rule_2_and_rule_1_from_their_bytes() 
         generator: Generator::Growth,
         ..BakeParams::default()
     };
-    let baked = bake(&s, params, None);
+    let baked = bake(&s, params, None).expect("the bake runs");
     assert_ne!(
         baked.bytes,
         store_bytes(&s, 2),
@@ -96,7 +96,7 @@ fn stored_vos_from_wall_segments_alone_pass_rule_2_and_rule_1_from_their_bytes()
             generator,
             ..BakeParams::default()
         };
-        let baked = bake(&s, params, None);
+        let baked = bake(&s, params, None).expect("the bake runs");
         let store = Store::parse(&baked.bytes).expect("the bake writes a valid store");
         let (cells_with_vos, checked) = check_stored_vos(&s, &store);
         eprintln!("{generator:?}: {cells_with_vos} cells, {checked} VOs");

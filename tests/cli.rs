@@ -7,7 +7,7 @@ use std::process::Command;
 use common::{repo, LYON};
 
 fn vocc(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_vocc"))
+    Command::new(common::vocc_bin())
         .args(args)
         .current_dir(repo(""))
         .output()
@@ -535,7 +535,7 @@ fn four_shards_in_four_processes_merge_into_the_single_bake() {
                 "--shard".into(),
                 format!("{i}/4"),
             ]);
-            Command::new(env!("CARGO_BIN_EXE_vocc"))
+            Command::new(common::vocc_bin())
                 .args(&a)
                 .current_dir(repo(""))
                 .stderr(std::process::Stdio::null())
@@ -631,7 +631,7 @@ fn vocc_limited(args: &[&str]) -> (std::process::Output, std::time::Duration) {
     let out = Command::new("sh")
         .arg("-c")
         .arg(r#"ulimit -v 4000000 && exec "$0" "$@""#)
-        .arg(env!("CARGO_BIN_EXE_vocc"))
+        .arg(common::vocc_bin())
         .args(args)
         .current_dir(repo(""))
         .output()
@@ -1098,7 +1098,7 @@ fn inspect_json_into_a_closed_pipe_exits_quietly_not_with_error_broken_pipe() {
     let out = Command::new("sh")
         .arg("-c")
         .arg(r#"{ sleep 0.3; "$0" inspect "$1" --json; echo "rc=$?" >&2; } | true"#)
-        .arg(env!("CARGO_BIN_EXE_vocc"))
+        .arg(common::vocc_bin())
         .arg(&store)
         .output()
         .unwrap();
@@ -1115,7 +1115,7 @@ fn eval_report_dir_writes_the_plots_it_promises_and_cells_are_named_by_id() {
     let dir = common::temp_dir("cli-eval-report");
     let (scene, store) = tiny_scene_and_store(&dir);
     let rep = dir.join("report");
-    let out = Command::new(env!("CARGO_BIN_EXE_vocc"))
+    let out = Command::new(common::vocc_bin())
         .args([
             "eval",
             &store,
@@ -1321,7 +1321,7 @@ fn bake_json_summary_carries_cells_vos_timings_bytes_and_skipped_objects() {
     text = text.replacen(r#""properties":{"height":20}"#, r#""properties":{}"#, 1);
     std::fs::write(&scene, text).unwrap();
     let store = dir.join("c.vocc");
-    let out = Command::new(env!("CARGO_BIN_EXE_vocc"))
+    let out = Command::new(common::vocc_bin())
         .args([
             "bake",
             scene.to_str().unwrap(),
@@ -1977,7 +1977,7 @@ fn usage_errors_exit_2_missing_cell_or_at_export_format_render_scene_shard_2_of_
     }
     // Under a job array, --shard auto without its count is a usage error too; without any
     // array engine's variable it is the environment that does not fit (1).
-    let out = Command::new(env!("CARGO_BIN_EXE_vocc"))
+    let out = Command::new(common::vocc_bin())
         .args(["bake", LYON, "--shard", "auto", "-o", "/tmp/s.vocc"])
         .env("JOB_COMPLETION_INDEX", "1")
         .output()

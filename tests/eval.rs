@@ -17,10 +17,10 @@ use vocc::runtime::format::{CellRecord, Store};
 fn no_false_culls_on_a_seeded_sample_of_lyon_cells() {
     let s = load_lyon();
     // Sample on the grid first (an empty store has the same grid), then bake those cells.
-    let full = bake(&s, Default::default(), Some(&[]));
+    let full = bake(&s, Default::default(), Some(&[])).expect("the bake runs");
     let grid = Store::parse(&full.bytes).unwrap();
     let ids = sample_cells(&grid, Some(12), 7);
-    let baked = bake(&s, Default::default(), Some(&ids));
+    let baked = bake(&s, Default::default(), Some(&ids)).expect("the bake runs");
     let store = Store::parse(&baked.bytes).unwrap();
     let caster = Caster::new(&s);
     let tree = BoxTree::new(&object_boxes(&s));
@@ -66,4 +66,25 @@ fn no_false_culls_on_a_seeded_sample_of_lyon_cells() {
     assert!(vos >= 30, "{vos} VOs");
     assert!(rays >= 30 * 8 * 8 / 2, "{rays} rays checked the VOs");
     assert!(culled >= 50, "{culled} objects culled over the sample");
+}
+
+/// Issue 34: `eval::report::bake` panicked on bad parameters; it returns the job's typed error.
+#[test]
+fn report_bake_refuses_bad_parameters_with_a_typed_error() {
+    use vocc::bake::job::JobError;
+    use vocc::bake::params::BakeParams;
+    let s = load_lyon();
+    let bad = BakeParams {
+        cell_size: -1.0,
+        ..BakeParams::default()
+    };
+    let e = bake(&s, bad, Some(&[]))
+        .err()
+        .expect("a negative cell size is refused");
+    assert!(matches!(e, JobError::Plan(_)), "{e:?}");
+    assert!(e.to_string().contains("cell size"), "{e}");
+    let e = bake(&s, BakeParams::default(), Some(&[u32::MAX]))
+        .err()
+        .expect("a cell outside the grid is refused");
+    assert!(matches!(e, JobError::CellOutsideGrid { .. }), "{e:?}");
 }

@@ -5,7 +5,7 @@
 //! namespace with `unshare`).
 //!
 //! Input: stores made with the library's encoder, scenes written by the tests (or by
-//! `vocc gen-city`), and the binary at `CARGO_BIN_EXE_vocc`. Output: assertions.
+//! `vocc gen-city`), and the binary `common::vocc_bin()`. Output: assertions.
 //! Invariants: bad input gives a non-zero exit status (CLI) or a typed error (library) naming
 //! what is wrong and where, never a panic; every single-bit flip of a store is refused; an
 //! interrupted or failed write leaves the output path as it was (absent, or the old store) and no
@@ -24,7 +24,7 @@ use vocc::runtime::{
 use vocc::scene::{load_bytes, walkable, LoadError, LoadErrorKind, Location, ReadOptions, Scene};
 
 fn vocc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vocc"))
+    Command::new(common::vocc_bin())
         .args(args)
         .output()
         .expect("vocc runs")
@@ -863,11 +863,10 @@ fn a_killed_bake_leaves_no_store_and_keeps_the_old_one() {
             // and exited 0. Give it the default action back, as a terminal's Ctrl-C would meet.
             let mut cmd = if signal == 2 && sigint_ignored() {
                 let mut e = Command::new("env");
-                e.arg("--default-signal=INT")
-                    .arg(env!("CARGO_BIN_EXE_vocc"));
+                e.arg("--default-signal=INT").arg(common::vocc_bin());
                 e
             } else {
-                Command::new(env!("CARGO_BIN_EXE_vocc"))
+                Command::new(common::vocc_bin())
             };
             let mut child = cmd
                 .args(bake_args(c, out.to_str().unwrap()))
@@ -947,7 +946,7 @@ fn a_full_disk_is_reported_and_leaves_nothing() {
     "#;
     let env = [
         ("MNT", mnt.to_str().unwrap()),
-        ("VOCC", env!("CARGO_BIN_EXE_vocc")),
+        ("VOCC", common::vocc_bin()),
         ("SCENE", small.to_str().unwrap()),
     ];
     let Some(o) = in_private_mount_namespace(script, &env) else {

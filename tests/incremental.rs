@@ -183,7 +183,7 @@ fn lyon_edits(cells: Cells, name: &str) {
 }
 
 fn vocc(args: &[&str]) -> std::process::Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_vocc"))
+    let out = Command::new(common::vocc_bin())
         .args(args)
         .output()
         .unwrap();

@@ -27,7 +27,7 @@ use vocc::scene::{
 
 /// The cells of the grid's middle row (an empty bake gives the grid).
 fn middle_row(s: &Scene) -> Vec<CellId> {
-    let empty = bake(s, Default::default(), Some(&[]));
+    let empty = bake(s, Default::default(), Some(&[])).expect("the bake runs");
     let g = Store::parse(&empty.bytes).unwrap().frame().grid;
     let row = (g.ny / 2) as CellId;
     (row * g.nx as CellId..(row + 1) * g.nx as CellId).collect()
@@ -62,7 +62,9 @@ fn same_geometry(a: &Scene, b: &Scene, what: &str) {
 fn lyon_as_geopackage_flatgeobuf_and_shapefile_bakes_the_same_store() {
     let original = load_lyon();
     let ids = middle_row(&original);
-    let want = bake(&original, Default::default(), Some(&ids)).bytes;
+    let want = bake(&original, Default::default(), Some(&ids))
+        .expect("the bake runs")
+        .bytes;
     assert_eq!(original.crs().map(|c| c.name.as_str()), Some("EPSG:3946"));
     for (ext, crs) in [
         ("gpkg", "EPSG:3946"),
@@ -73,7 +75,9 @@ fn lyon_as_geopackage_flatgeobuf_and_shapefile_bakes_the_same_store() {
         let s = scene::load(&[path], &lyon_options()).unwrap();
         assert_eq!(s.crs().map(|c| c.name.as_str()), Some(crs), "{ext}");
         same_geometry(&original, &s, ext);
-        let got = bake(&s, Default::default(), Some(&ids)).bytes;
+        let got = bake(&s, Default::default(), Some(&ids))
+            .expect("the bake runs")
+            .bytes;
         if crs == "EPSG:3946" {
             assert!(got == want, "{ext}: the store differs from the GeoJSON's");
             continue;
@@ -129,12 +133,16 @@ fn lyon_in_longitude_latitude_is_projected_and_culls_the_same_share() {
     let ids = middle_row(&original);
     let want = culled_share(
         &original,
-        &bake(&original, Default::default(), Some(&ids)).bytes,
+        &bake(&original, Default::default(), Some(&ids))
+            .expect("the bake runs")
+            .bytes,
         &ids,
     );
     let got = culled_share(
         &back,
-        &bake(&back, Default::default(), Some(&ids)).bytes,
+        &bake(&back, Default::default(), Some(&ids))
+            .expect("the bake runs")
+            .bytes,
         &ids,
     );
     assert!(want > 0.2, "the row culls {want}");
@@ -213,9 +221,9 @@ fn helsinki_pbf_reads_heights_from_its_tags_and_evaluates_with_no_false_culls() 
     assert!(e.max.x - e.min.x > 900.0 && e.max.x - e.min.x < 1100.0);
     assert!(e.max.y - e.min.y > 1500.0 && e.max.y - e.min.y < 1800.0);
     // Bake a seeded sample of cells and check them against the ray-sampled ground truth.
-    let empty = bake(&s, Default::default(), Some(&[]));
+    let empty = bake(&s, Default::default(), Some(&[])).expect("the bake runs");
     let ids = sample_cells(&Store::parse(&empty.bytes).unwrap(), Some(10), 3);
-    let baked = bake(&s, Default::default(), Some(&ids));
+    let baked = bake(&s, Default::default(), Some(&ids)).expect("the bake runs");
     let store = Store::parse(&baked.bytes).unwrap();
     let caster = Caster::new(&s);
     let tree = BoxTree::new(&object_boxes(&s));
@@ -286,9 +294,9 @@ fn citygml_sample_gives_the_blockers_of_its_cityjson_and_bakes() {
         walls += a.len();
     }
     assert!(walls > 2000, "{walls} blockers");
-    let empty = bake(&gml, Default::default(), Some(&[]));
+    let empty = bake(&gml, Default::default(), Some(&[])).expect("the bake runs");
     let ids = sample_cells(&Store::parse(&empty.bytes).unwrap(), Some(6), 5);
-    let baked = bake(&gml, Default::default(), Some(&ids));
+    let baked = bake(&gml, Default::default(), Some(&ids)).expect("the bake runs");
     let store = Store::parse(&baked.bytes).unwrap();
     let caster = Caster::new(&gml);
     for &id in &ids {

@@ -283,7 +283,7 @@ fn run(name: &str, buildings: &[Building], offset: f64) -> (Local, Checked) {
             "{name} at offset {offset:e}: origin {o}"
         );
     }
-    let baked = bake(&s, Default::default(), None);
+    let baked = bake(&s, Default::default(), None).expect("the bake runs");
     let store = Store::parse(&baked.bytes).expect("a valid store");
     let mut frame = *store.frame();
     frame.origin = [0.0; 3];

@@ -125,10 +125,10 @@ fn three_oracles(s: &Scene, size: f64, n: usize) -> (usize, usize) {
         cell_size: size,
         ..Default::default()
     };
-    let full = bake(s, params.clone(), Some(&[]));
+    let full = bake(s, params.clone(), Some(&[])).expect("the bake runs");
     let grid = Store::parse(&full.bytes).unwrap();
     let ids = sample_cells(&grid, Some(n), 11);
-    let baked = bake(s, params, Some(&ids));
+    let baked = bake(s, params, Some(&ids)).expect("the bake runs");
     let store = Store::parse(&baked.bytes).unwrap();
     // 1. The exact verifier over the rule-2 supporters of every stored VO.
     let (checked, _) = common::check_stored_vos(s, &store);

@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 use common::repo;
 
 fn vocc(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_vocc"))
+    Command::new(common::vocc_bin())
         .args(args)
         .current_dir(repo(""))
         .output()
@@ -169,7 +169,7 @@ fn view_serves_the_same_page() {
         page.to_str().unwrap(),
     ]);
     assert!(out.status.success());
-    let mut child = Command::new(env!("CARGO_BIN_EXE_vocc"))
+    let mut child = Command::new(common::vocc_bin())
         .args([
             "view",
             &store,

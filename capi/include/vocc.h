@@ -8,8 +8,8 @@
  * message naming what was wrong (pass NULL to ignore it).
  *
  * Ownership
- * - vocc_store_open BORROWS the caller's bytes: they must stay alive and unchanged until
- *   vocc_store_free. Frames, cells and blobs are plain values copied into caller memory.
+ * - vocc_store_open COPIES the caller's bytes: they may be freed or reused on return.
+ *   Frames, cells and blobs are plain values copied into caller memory.
  * - vocc_tree_new COPIES the boxes: the caller's array may be freed on return.
  * - Each *_new / *_open that returns VOCC_OK gives an object the caller frees once with the
  *   matching *_free (which accepts NULL). On failure the out-pointer is set to NULL.
@@ -21,8 +21,7 @@
  * - VoccStore and VoccTree are immutable after creation: any number of threads may use one at
  *   once.
  * - A VoccQuery is scratch space: one thread at a time (make one per thread).
- * - There is no global state; no function keeps a pointer it was given, except the store's
- *   borrowed bytes.
+ * - There is no global state; no function keeps a pointer it was given.
  *
  * Coordinates are the store's local frame (world = local + frame.origin) unless a name says
  * world. Boxes are 6 doubles: xmin, ymin, zmin, xmax, ymax, zmax.
@@ -114,7 +113,7 @@
 typedef struct VoccQuery VoccQuery;
 
 /**
- * A parsed store; borrows the bytes given to `vocc_store_open`.
+ * A parsed store; owns a copy of the bytes given to `vocc_store_open`.
  */
 typedef struct VoccStore VoccStore;
 
@@ -255,8 +254,8 @@ const char *vocc_version(void);
 
 /**
  * Opens a store of version 2.0 or 1.0 from the `len` bytes at `bytes`, checking all of it
- * once (docs/FORMAT.md section 8.1). The bytes are borrowed, not copied: keep them alive and
- * unchanged until `vocc_store_free`. On success `*out` is the store; on failure NULL.
+ * once (docs/FORMAT.md section 8.1). The bytes are copied (once, here): the caller may free or
+ * reuse them as soon as this returns. On success `*out` is the store; on failure NULL.
  *
  * # Safety
  * `bytes` points to `len` readable bytes (or `len` is 0); `out` is NULL or writable; `err` is
@@ -268,7 +267,7 @@ int32_t vocc_store_open(const uint8_t *bytes,
                         struct VoccError *err);
 
 /**
- * Frees a store (NULL is ignored). Its bytes may be freed afterwards.
+ * Frees a store and its copy of the bytes (NULL is ignored).
  *
  * # Safety
  * `store` is NULL or came from `vocc_store_open` and was not freed yet.

@@ -21,16 +21,15 @@
 //!   copy the result into the caller's buffer;
 //! - this file wraps `vocc::runtime` and decides nothing about occlusion itself.
 
-#![deny(unsafe_op_in_unsafe_fn)]
+#![deny(clippy::undocumented_unsafe_blocks, unsafe_op_in_unsafe_fn)]
 
 use std::ffi::c_char;
-use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::panic::catch_unwind;
 use std::ptr;
 
 use vocc::runtime::culler::MAX_BOXES;
-use vocc::runtime::format::{decode_blob, decode_frame, validate_frame, CellRecord, FormatError};
-use vocc::runtime::frame::QPoint;
-use vocc::runtime::{pvs, BoxTree, CellId, Frame, GridDescriptor, QVo, Store, MAX_VOS_PER_CELL};
+use vocc::runtime::format::{decode_blob, decode_frame};
+use vocc::runtime::{pvs, BoxTree, OwnedStore, MAX_VOS_PER_CELL};
 
 /// Success.
 pub const VOCC_OK: i32 = 0;
@@ -164,9 +163,9 @@ pub struct VoccVoGeom {
     pub h: f64,
 }
 
-/// A parsed store; borrows the bytes given to `vocc_store_open`.
+/// A parsed store; owns a copy of the bytes given to `vocc_store_open`.
 pub struct VoccStore {
-    store: Store<'static>,
+    store: OwnedStore<Box<[u8]>>,
 }
 
 /// The bounding volume hierarchy over a scene's object boxes, built once per scene.
@@ -181,269 +180,6 @@ pub struct VoccQuery {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The boundary: status codes, messages, panics.
-
-struct Fail {
-    code: i32,
-    message: String,
-}
-
-fn fail(code: i32, message: impl Into<String>) -> Fail {
-    Fail {
-        code,
-        message: message.into(),
-    }
-}
-
-impl From<FormatError> for Fail {
-    fn from(e: FormatError) -> Fail {
-        let code = match e {
-            FormatError::UnsupportedVersion { .. } => VOCC_ERR_VERSION,
-            FormatError::Checksum { .. } => VOCC_ERR_CHECKSUM,
-            FormatError::BadFrame(_) => VOCC_ERR_FRAME,
-            FormatError::CellOutOfGrid { .. } => VOCC_ERR_OUTSIDE_GRID,
-            _ => VOCC_ERR_FORMAT,
-        };
-        fail(code, e.to_string())
-    }
-}
-
-/// Writes the code and message into `err` when it is not NULL.
-fn report(err: *mut VoccError, code: i32, message: &str) {
-    // SAFETY: the caller passes NULL or a pointer to a writable VoccError.
-    let Some(e) = (unsafe { err.as_mut() }) else {
-        return;
-    };
-    e.code = code;
-    let mut n = message.len().min(VOCC_MESSAGE_LEN - 1);
-    while !message.is_char_boundary(n) {
-        n -= 1;
-    }
-    for (dst, &src) in e.message.iter_mut().zip(&message.as_bytes()[..n]) {
-        *dst = src as c_char;
-    }
-    e.message[n] = 0;
-}
-
-/// Runs `f` at the boundary: its result becomes a status code and `err`; a panic becomes
-/// `VOCC_ERR_PANIC`.
-fn guard(err: *mut VoccError, f: impl FnOnce() -> Result<(), Fail>) -> i32 {
-    let r = catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|p| {
-        let what = p
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| p.downcast_ref::<String>().cloned())
-            .unwrap_or_default();
-        Err(fail(VOCC_ERR_PANIC, format!("internal error: {what}")))
-    });
-    match r {
-        Ok(()) => {
-            report(err, VOCC_OK, "");
-            VOCC_OK
-        }
-        Err(Fail { code, message }) => {
-            report(err, code, &message);
-            code
-        }
-    }
-}
-
-/// A shared reference from a pointer that may be NULL.
-fn get<'a, T>(p: *const T, what: &str) -> Result<&'a T, Fail> {
-    // SAFETY: the caller passes NULL or a pointer to a live, properly aligned T.
-    unsafe { p.as_ref() }.ok_or_else(|| fail(VOCC_ERR_NULL, format!("{what} is NULL")))
-}
-
-fn get_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Fail> {
-    // SAFETY: as for `get`, and the T is not aliased during the call.
-    unsafe { p.as_mut() }.ok_or_else(|| fail(VOCC_ERR_NULL, format!("{what} is NULL")))
-}
-
-/// `len` elements at `p`; NULL is allowed for an empty slice.
-fn slice<'a, T>(p: *const T, len: usize, what: &str) -> Result<&'a [T], Fail> {
-    if len == 0 {
-        return Ok(&[]);
-    }
-    if p.is_null() {
-        return Err(fail(VOCC_ERR_NULL, format!("{what} is NULL")));
-    }
-    if len
-        .checked_mul(size_of::<T>())
-        .is_none_or(|b| b > isize::MAX as usize)
-    {
-        return Err(fail(
-            VOCC_ERR_ARGUMENT,
-            format!("{what}: length {len} too large"),
-        ));
-    }
-    // SAFETY: non-NULL, and the caller guarantees `len` readable elements at `p`.
-    Ok(unsafe { std::slice::from_raw_parts(p, len) })
-}
-
-fn slice_mut<'a, T>(p: *mut T, len: usize, what: &str) -> Result<&'a mut [T], Fail> {
-    if len == 0 {
-        return Ok(&mut []);
-    }
-    if p.is_null() {
-        return Err(fail(VOCC_ERR_NULL, format!("{what} is NULL")));
-    }
-    if len
-        .checked_mul(size_of::<T>())
-        .is_none_or(|b| b > isize::MAX as usize)
-    {
-        return Err(fail(
-            VOCC_ERR_ARGUMENT,
-            format!("{what}: length {len} too large"),
-        ));
-    }
-    // SAFETY: non-NULL, and the caller guarantees `len` writable elements at `p`, unaliased.
-    Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
-}
-
-/// Sets a constructor's out-pointer to NULL up front, so it is NULL on every failure.
-fn clear_out<T>(out: *mut *mut T) {
-    // SAFETY: the caller passes NULL or a writable pointer slot.
-    if let Some(o) = unsafe { out.as_mut() } {
-        *o = ptr::null_mut();
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Conversions, checked.
-
-impl From<&Frame> for VoccFrame {
-    fn from(f: &Frame) -> VoccFrame {
-        VoccFrame {
-            origin: f.origin,
-            min_x: f.grid.min_x,
-            min_y: f.grid.min_y,
-            cell_size: f.grid.cell_size,
-            nx: f.grid.nx,
-            ny: f.grid.ny,
-            quantum: f.quantum,
-            eye_lo: f.eye_lo,
-            eye_hi: f.eye_hi,
-            ground_z0: f.ground_z0,
-            ground_step: f.ground_step,
-            h0: f.h0,
-            h_ratio: f.h_ratio,
-        }
-    }
-}
-
-/// The caller's frame, checked against rules F1..F12 as a frame on its own follows them (2.0:
-/// F12 at level 31).
-fn frame_of(f: *const VoccFrame) -> Result<Frame, Fail> {
-    let f = get(f, "frame")?;
-    let frame = Frame {
-        origin: f.origin,
-        grid: GridDescriptor {
-            min_x: f.min_x,
-            min_y: f.min_y,
-            cell_size: f.cell_size,
-            nx: f.nx,
-            ny: f.ny,
-        },
-        quantum: f.quantum,
-        eye_lo: f.eye_lo,
-        eye_hi: f.eye_hi,
-        ground_z0: f.ground_z0,
-        ground_step: f.ground_step,
-        h0: f.h0,
-        h_ratio: f.h_ratio,
-    };
-    validate_frame(&frame)?;
-    Ok(frame)
-}
-
-impl From<&CellRecord> for VoccCell {
-    fn from(r: &CellRecord) -> VoccCell {
-        let mut c = VoccCell {
-            skipped: matches!(r, CellRecord::Skipped) as u8,
-            ground: r.ground(),
-            count: r.vos().len() as u8,
-            ..VoccCell::default()
-        };
-        for (dst, q) in c.vos.iter_mut().zip(r.vos()) {
-            *dst = VoccVo {
-                x1: q.a.x,
-                y1: q.a.y,
-                x2: q.b.x,
-                y2: q.b.y,
-                exp1: q.a.e,
-                exp2: q.b.e,
-                level: q.level,
-            };
-        }
-        c
-    }
-}
-
-/// The caller's cell, checked as a decoder checks a record: at most 10 VOs, fields in range,
-/// canonical endpoints, no degenerate VO.
-fn record_of(c: *const VoccCell) -> Result<CellRecord, Fail> {
-    let c = get(c, "cell")?;
-    if c.skipped != 0 {
-        return Ok(CellRecord::Skipped);
-    }
-    let vos = c.vos.get(..c.count as usize).ok_or_else(|| {
-        fail(
-            VOCC_ERR_ARGUMENT,
-            format!("cell: count {} is over {VOCC_MAX_VOS}", c.count),
-        )
-    })?;
-    let mut qs = [QVo {
-        a: QPoint::fine(0, 0),
-        b: QPoint::fine(0, 0),
-        level: 0,
-        deep: false,
-    }; VOCC_MAX_VOS];
-    for (k, (v, q)) in vos.iter().zip(qs.iter_mut()).enumerate() {
-        *q = QVo {
-            a: QPoint {
-                e: v.exp1,
-                x: v.x1,
-                y: v.y1,
-            },
-            b: QPoint {
-                e: v.exp2,
-                x: v.x2,
-                y: v.y2,
-            },
-            level: v.level,
-            deep: false,
-        };
-        if !q.in_range() {
-            return Err(fail(
-                VOCC_ERR_ARGUMENT,
-                format!("cell: VO {k} has a field out of range (exponents 0..8, coordinates 0..512, level 0..32)"),
-            ));
-        }
-        if !q.is_canonical() {
-            return Err(fail(
-                VOCC_ERR_ARGUMENT,
-                format!("cell: VO {k} has an endpoint that is not canonical (a smaller exponent holds it)"),
-            ));
-        }
-        if q.is_degenerate() {
-            return Err(fail(
-                VOCC_ERR_ARGUMENT,
-                format!("cell: VO {k} is degenerate (one grid point)"),
-            ));
-        }
-    }
-    Ok(CellRecord::new(c.ground, &qs[..vos.len()])?)
-}
-
-fn in_grid(frame: &Frame, id: CellId) -> Result<(), Fail> {
-    let cells = frame.grid.cell_count();
-    if id as u64 >= cells {
-        return Err(FormatError::CellOutOfGrid { id, cells }.into());
-    }
-    Ok(())
-}
-
-// ---------------------------------------------------------------------------------------------
 // Stores, frames, blobs.
 
 /// The library's version, a static NUL-terminated string such as "0.1.0".
@@ -453,8 +189,8 @@ pub extern "C" fn vocc_version() -> *const c_char {
 }
 
 /// Opens a store of version 2.0 or 1.0 from the `len` bytes at `bytes`, checking all of it
-/// once (docs/FORMAT.md section 8.1). The bytes are borrowed, not copied: keep them alive and
-/// unchanged until `vocc_store_free`. On success `*out` is the store; on failure NULL.
+/// once (docs/FORMAT.md section 8.1). The bytes are copied (once, here): the caller may free or
+/// reuse them as soon as this returns. On success `*out` is the store; on failure NULL.
 ///
 /// # Safety
 /// `bytes` points to `len` readable bytes (or `len` is 0); `out` is NULL or writable; `err` is
@@ -466,17 +202,23 @@ pub unsafe extern "C" fn vocc_store_open(
     out: *mut *mut VoccStore,
     err: *mut VoccError,
 ) -> i32 {
-    clear_out(out);
-    guard(err, || {
-        let out = get_mut(out, "out")?;
-        let bytes: &'static [u8] = slice(bytes, len, "bytes")?;
-        let store = Store::parse(bytes)?;
+    // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+    unsafe { clear_out(out) };
+    let r = guard(|| {
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        let out = unsafe { get_mut(out, "out") }?;
+        // SAFETY: `bytes` points to `len` readable bytes (or `len` is 0) (this function's `# Safety`).
+        let bytes = unsafe { slice(bytes, len, "bytes") }?;
+        // Copied: the store owns its bytes, so the caller may free theirs when this returns.
+        let store = OwnedStore::parse(Box::<[u8]>::from(bytes))?;
         *out = Box::into_raw(Box::new(VoccStore { store }));
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
-/// Frees a store (NULL is ignored). Its bytes may be freed afterwards.
+/// Frees a store and its copy of the bytes (NULL is ignored).
 ///
 /// # Safety
 /// `store` is NULL or came from `vocc_store_open` and was not freed yet.
@@ -496,11 +238,14 @@ pub unsafe extern "C" fn vocc_store_free(store: *mut VoccStore) {
 /// `store` is NULL or a live store; `out` is NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn vocc_store_frame(store: *const VoccStore, out: *mut VoccFrame) -> i32 {
-    guard(ptr::null_mut(), || {
-        let s = get(store, "store")?;
-        *get_mut(out, "out")? = VoccFrame::from(s.store.frame());
+    let r = guard(|| {
+        // SAFETY: `store` is NULL or a live store (this function's `# Safety`).
+        let s = unsafe { get(store, "store") }?;
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        *unsafe { get_mut(out, "out") }? = VoccFrame::from(s.store.store().frame());
         Ok(())
-    })
+    });
+    status(r)
 }
 
 /// The store's version and scene section.
@@ -509,9 +254,11 @@ pub unsafe extern "C" fn vocc_store_frame(store: *const VoccStore, out: *mut Voc
 /// `store` is NULL or a live store; `out` is NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn vocc_store_info(store: *const VoccStore, out: *mut VoccStoreInfo) -> i32 {
-    guard(ptr::null_mut(), || {
-        let s = &get(store, "store")?.store;
-        let out = get_mut(out, "out")?;
+    let r = guard(|| {
+        // SAFETY: `store` is NULL or a live store (this function's `# Safety`).
+        let s = unsafe { get(store, "store") }?.store.store();
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        let out = unsafe { get_mut(out, "out") }?;
         let (major, minor) = s.version();
         let crs = s.crs().as_bytes();
         let mut info = VoccStoreInfo {
@@ -528,7 +275,8 @@ pub unsafe extern "C" fn vocc_store_info(store: *const VoccStore, out: *mut Vocc
         }
         *out = info;
         Ok(())
-    })
+    });
+    status(r)
 }
 
 /// Number of cells of the store's grid (nx * ny); 0 for NULL.
@@ -538,7 +286,7 @@ pub unsafe extern "C" fn vocc_store_info(store: *const VoccStore, out: *mut Vocc
 #[no_mangle]
 pub unsafe extern "C" fn vocc_store_cell_count(store: *const VoccStore) -> u32 {
     // SAFETY: NULL or a live store.
-    unsafe { store.as_ref() }.map_or(0, |s| s.store.cell_count())
+    unsafe { store.as_ref() }.map_or(0, |s| s.store.store().cell_count())
 }
 
 /// The record of cell `id` of the store. Reads at most 63 index bytes and one record;
@@ -553,12 +301,16 @@ pub unsafe extern "C" fn vocc_store_cell(
     out: *mut VoccCell,
     err: *mut VoccError,
 ) -> i32 {
-    guard(err, || {
-        let s = get(store, "store")?;
-        let out = get_mut(out, "out")?;
-        *out = VoccCell::from(&s.store.cell(id)?);
+    let r = guard(|| {
+        // SAFETY: `store` is NULL or a live store (this function's `# Safety`).
+        let s = unsafe { get(store, "store") }?;
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        let out = unsafe { get_mut(out, "out") }?;
+        *out = VoccCell::from(&s.store.store().cell(id)?);
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
 /// Decodes and checks a frame from exactly 112 bytes (the `.frame` file `vocc export --blob`
@@ -574,12 +326,16 @@ pub unsafe extern "C" fn vocc_frame_decode(
     out: *mut VoccFrame,
     err: *mut VoccError,
 ) -> i32 {
-    guard(err, || {
-        let out = get_mut(out, "out")?;
-        let f = decode_frame(slice(bytes, len, "bytes")?)?;
+    let r = guard(|| {
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        let out = unsafe { get_mut(out, "out") }?;
+        // SAFETY: `bytes` points to `len` readable bytes (or `len` is 0) (this function's `# Safety`).
+        let f = decode_frame(unsafe { slice(bytes, len, "bytes") }?)?;
         *out = VoccFrame::from(&f);
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
 /// Decodes and checks one cell's blob of version 2.0 or 1.0 (docs/FORMAT.md section 6) against
@@ -597,15 +353,21 @@ pub unsafe extern "C" fn vocc_blob_decode(
     out: *mut VoccCell,
     err: *mut VoccError,
 ) -> i32 {
-    guard(err, || {
-        let f = frame_of(frame)?;
-        let id = get_mut(id, "id")?;
-        let out = get_mut(out, "out")?;
-        let (cell, rec) = decode_blob(&f, slice(bytes, len, "bytes")?)?;
+    let r = guard(|| {
+        // SAFETY: `frame` is NULL or readable (this function's `# Safety`).
+        let f = unsafe { frame_of(frame) }?;
+        // SAFETY: `id` is NULL or writable (this function's `# Safety`).
+        let id = unsafe { get_mut(id, "id") }?;
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        let out = unsafe { get_mut(out, "out") }?;
+        // SAFETY: `bytes` points to `len` readable bytes (or `len` is 0) (this function's `# Safety`).
+        let (cell, rec) = decode_blob(&f, unsafe { slice(bytes, len, "bytes") }?)?;
         *id = cell;
         *out = VoccCell::from(&rec);
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
 /// The cell holding local position (x, y): `VOCC_OK` and `*id`, or `VOCC_ERR_OUTSIDE_GRID`
@@ -621,9 +383,11 @@ pub unsafe extern "C" fn vocc_cell_at(
     y: f64,
     id: *mut u32,
 ) -> i32 {
-    guard(ptr::null_mut(), || {
-        let f = frame_of(frame)?;
-        let id = get_mut(id, "id")?;
+    let r = guard(|| {
+        // SAFETY: `frame` is NULL or readable (this function's `# Safety`).
+        let f = unsafe { frame_of(frame) }?;
+        // SAFETY: `id` is NULL or writable (this function's `# Safety`).
+        let id = unsafe { get_mut(id, "id") }?;
         *id = f.grid.cell_at(x, y).ok_or_else(|| {
             fail(
                 VOCC_ERR_OUTSIDE_GRID,
@@ -631,7 +395,8 @@ pub unsafe extern "C" fn vocc_cell_at(
             )
         })?;
         Ok(())
-    })
+    });
+    status(r)
 }
 
 /// `vocc_cell_at` for a world position: (x - origin[0], y - origin[1]).
@@ -657,16 +422,19 @@ pub unsafe extern "C" fn vocc_cell_at_world(
 /// `frame` is NULL or readable; `rect` is NULL or points to 4 writable doubles.
 #[no_mangle]
 pub unsafe extern "C" fn vocc_cell_rect(frame: *const VoccFrame, id: u32, rect: *mut f64) -> i32 {
-    guard(ptr::null_mut(), || {
-        let f = frame_of(frame)?;
+    let r = guard(|| {
+        // SAFETY: `frame` is NULL or readable (this function's `# Safety`).
+        let f = unsafe { frame_of(frame) }?;
         in_grid(&f, id)?;
         let r = f
             .grid
             .cell_rect(id)
             .ok_or_else(|| fail(VOCC_ERR_OUTSIDE_GRID, format!("cell {id}")))?;
-        slice_mut(rect, 4, "rect")?.copy_from_slice(&r);
+        // SAFETY: `rect` is NULL or points to 4 writable doubles (this function's `# Safety`).
+        unsafe { slice_mut(rect, 4, "rect") }?.copy_from_slice(&r);
         Ok(())
-    })
+    });
+    status(r)
 }
 
 /// The geometry of VO `k` of cell `id` with record `cell`, local frame.
@@ -681,10 +449,12 @@ pub unsafe extern "C" fn vocc_vo_geometry(
     k: u32,
     out: *mut VoccVoGeom,
 ) -> i32 {
-    guard(ptr::null_mut(), || {
-        let f = frame_of(frame)?;
+    let r = guard(|| {
+        // SAFETY: `frame` is NULL or readable (this function's `# Safety`).
+        let f = unsafe { frame_of(frame) }?;
         in_grid(&f, id)?;
-        let rec = record_of(cell)?;
+        // SAFETY: `cell` is NULL or readable (this function's `# Safety`).
+        let rec = unsafe { record_of(cell) }?;
         let q = rec.vos().get(k as usize).ok_or_else(|| {
             fail(
                 VOCC_ERR_ARGUMENT,
@@ -694,14 +464,16 @@ pub unsafe extern "C" fn vocc_vo_geometry(
         let g = f
             .dequantize(id, rec.stand(), q)
             .ok_or_else(|| fail(VOCC_ERR_OUTSIDE_GRID, format!("cell {id}")))?;
-        *get_mut(out, "out")? = VoccVoGeom {
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        *unsafe { get_mut(out, "out") }? = VoccVoGeom {
             a: g.a,
             b: g.b,
             g: g.g,
             h: g.h,
         };
         Ok(())
-    })
+    });
+    status(r)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -725,9 +497,11 @@ pub unsafe extern "C" fn vocc_tree_new(
     out: *mut *mut VoccTree,
     err: *mut VoccError,
 ) -> i32 {
-    clear_out(out);
-    guard(err, || {
-        let out = get_mut(out, "out")?;
+    // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+    unsafe { clear_out(out) };
+    let r = guard(|| {
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        let out = unsafe { get_mut(out, "out") }?;
         if count > MAX_BOXES {
             return Err(fail(
                 VOCC_ERR_ARGUMENT,
@@ -737,13 +511,15 @@ pub unsafe extern "C" fn vocc_tree_new(
         let n = count
             .checked_mul(6)
             .ok_or_else(|| fail(VOCC_ERR_ARGUMENT, format!("{count} boxes: too many")))?;
-        let flat = slice(boxes, n, "boxes")?;
+        // SAFETY: `boxes` points to `6 * count` readable doubles (or `count` is 0) (this function's `# Safety`).
+        let flat = unsafe { slice(boxes, n, "boxes") }?;
         let mut local: Vec<[f64; 6]> = flat
             .chunks_exact(6)
             .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
             .collect();
         if !origin.is_null() {
-            let o = slice(origin, 3, "origin")?;
+            // SAFETY: `origin` points to 3 readable doubles (not NULL here) (this function's `# Safety`).
+            let o = unsafe { slice(origin, 3, "origin") }?;
             // As `BoxTree::from_world`: local = world - origin.
             for b in &mut local {
                 for k in 0..6 {
@@ -754,7 +530,9 @@ pub unsafe extern "C" fn vocc_tree_new(
         let tree = BoxTree::new(&local);
         *out = Box::into_raw(Box::new(VoccTree { tree }));
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
 /// Frees a tree (NULL is ignored).
@@ -792,10 +570,13 @@ pub unsafe extern "C" fn vocc_query_new(
     out: *mut *mut VoccQuery,
     err: *mut VoccError,
 ) -> i32 {
-    clear_out(out);
-    guard(err, || {
-        let t = get(tree, "tree")?;
-        let out = get_mut(out, "out")?;
+    // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+    unsafe { clear_out(out) };
+    let r = guard(|| {
+        // SAFETY: `tree` is NULL or a live tree (this function's `# Safety`).
+        let t = unsafe { get(tree, "tree") }?;
+        // SAFETY: `out` is NULL or writable (this function's `# Safety`).
+        let out = unsafe { get_mut(out, "out") }?;
         let objects = t.tree.len();
         // The culler holds a bitmap of the culled objects (one u32 per 32) before the ids.
         let out_vec = Vec::with_capacity(objects + objects.div_ceil(32));
@@ -804,7 +585,9 @@ pub unsafe extern "C" fn vocc_query_new(
             objects,
         }));
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
 /// Frees a query (NULL is ignored).
@@ -838,19 +621,27 @@ pub unsafe extern "C" fn vocc_query_ids(query: *const VoccQuery, count: *mut usi
 }
 
 /// Runs the culler for cell `id` with record `cell` into the query's scratch memory; returns
-/// the number of visible objects.
-fn run_pvs(
+/// the query and the number of visible objects.
+///
+/// # Safety
+/// `query` is NULL or a live query that nothing else uses for `'a`; `tree` is NULL or a live
+/// tree not freed for the call; `frame` and `cell` are NULL or readable.
+unsafe fn run_pvs<'a>(
     query: *mut VoccQuery,
     tree: *const VoccTree,
     frame: *const VoccFrame,
     id: u32,
     cell: *const VoccCell,
-) -> Result<(&'static mut VoccQuery, usize), Fail> {
-    let q = get_mut(query, "query")?;
-    let t = get(tree, "tree")?;
-    let f = frame_of(frame)?;
+) -> Result<(&'a mut VoccQuery, usize), Fail> {
+    // SAFETY: NULL or a live query, unaliased for 'a (this function's contract).
+    let q = unsafe { get_mut(query, "query") }?;
+    // SAFETY: NULL or a live tree for the call (this function's contract).
+    let t = unsafe { get(tree, "tree") }?;
+    // SAFETY: NULL or readable (this function's contract).
+    let f = unsafe { frame_of(frame) }?;
     in_grid(&f, id)?;
-    let rec = record_of(cell)?;
+    // SAFETY: NULL or readable (this function's contract).
+    let rec = unsafe { record_of(cell) }?;
     if t.tree.len() > q.objects {
         return Err(fail(
             VOCC_ERR_ARGUMENT,
@@ -890,9 +681,11 @@ pub unsafe extern "C" fn vocc_pvs(
     count: *mut usize,
     err: *mut VoccError,
 ) -> i32 {
-    guard(err, || {
-        let count = get_mut(count, "count")?;
-        let (q, n) = run_pvs(query, tree, frame, id, cell)?;
+    let r = guard(|| {
+        // SAFETY: `count` is NULL or writable (this function's `# Safety`).
+        let count = unsafe { get_mut(count, "count") }?;
+        // SAFETY: the pointers are as `run_pvs` requires (this function's `# Safety`).
+        let (q, n) = unsafe { run_pvs(query, tree, frame, id, cell) }?;
         *count = n;
         if ids.is_null() {
             return Ok(());
@@ -903,9 +696,12 @@ pub unsafe extern "C" fn vocc_pvs(
                 format!("{n} ids do not fit a buffer of {capacity}"),
             ));
         }
-        slice_mut(ids, n, "ids")?.copy_from_slice(&q.out);
+        // SAFETY: `ids` points to `capacity >= n` writable u32 (not NULL here) (this function's `# Safety`).
+        unsafe { slice_mut(ids, n, "ids") }?.copy_from_slice(&q.out);
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
 /// `vocc_pvs` as a bitmap: bit `i % 8` of byte `i / 8` (least significant first) is set when
@@ -927,9 +723,11 @@ pub unsafe extern "C" fn vocc_pvs_bitmap(
     count: *mut usize,
     err: *mut VoccError,
 ) -> i32 {
-    guard(err, || {
-        let count = get_mut(count, "count")?;
-        let objects = get(tree, "tree")?.tree.len();
+    let r = guard(|| {
+        // SAFETY: `count` is NULL or writable (this function's `# Safety`).
+        let count = unsafe { get_mut(count, "count") }?;
+        // SAFETY: `tree` is NULL or a live tree (this function's `# Safety`).
+        let objects = unsafe { get(tree, "tree") }?.tree.len();
         let need = objects.div_ceil(8);
         if bitmap_len < need {
             return Err(fail(
@@ -937,8 +735,10 @@ pub unsafe extern "C" fn vocc_pvs_bitmap(
                 format!("{objects} objects need a bitmap of {need} bytes, {bitmap_len} given"),
             ));
         }
-        let bits = slice_mut(bitmap, need, "bitmap")?;
-        let (q, n) = run_pvs(query, tree, frame, id, cell)?;
+        // SAFETY: `bitmap` is NULL or points to `bitmap_len >= need` writable bytes (this function's `# Safety`).
+        let bits = unsafe { slice_mut(bitmap, need, "bitmap") }?;
+        // SAFETY: the pointers are as `run_pvs` requires (this function's `# Safety`).
+        let (q, n) = unsafe { run_pvs(query, tree, frame, id, cell) }?;
         bits.fill(0);
         for &i in &q.out {
             // Ids are below the tree's length, so the index is in range; `get_mut` keeps it
@@ -949,8 +749,16 @@ pub unsafe extern "C" fn vocc_pvs_bitmap(
         }
         *count = n;
         Ok(())
-    })
+    });
+    // SAFETY: `err` is NULL or writable (this function's `# Safety`).
+    unsafe { finish(err, r) }
 }
 
+mod boundary;
 #[cfg(test)]
 mod tests;
+
+use boundary::{
+    clear_out, fail, finish, frame_of, get, get_mut, guard, in_grid, record_of, slice, slice_mut,
+    status, Fail,
+};

@@ -17,7 +17,7 @@ mkdir -p "$out"
 $CARGO build --locked --profile test -p vocc-capi
 # The CLI as `cargo test` builds it (its features, with the dev-dependencies unified), so after
 # `cargo test` nothing is compiled again.
-$CARGO test --locked --no-run --test all
+$CARGO test --locked --no-run
 lib=target/debug
 "$CC" -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Icapi/include examples/c/pvs.c \
   "$lib/libvocc.a" -lm -lpthread -ldl -o "$out/pvs"

@@ -345,3 +345,23 @@ def test_bake_summary_counts_convex_pieces_and_blocker_objects_as_info_does(bake
     assert sc["convex_pieces"] == info["convex_pieces"]
     assert sc["blocker_objects"] == info["blocker_objects"]
     assert sc["no_blocker_objects"] == info["no_blocker_objects"]
+
+
+def test_merge_of_cli_shards_gives_the_single_bake(tmp_path):
+    """`vocc.merge` is the library's merge (`vocc::bake::merge`): two shards baked by the CLI
+    merge into the CLI's single bake, byte for byte, hashes included; a missing shard is refused
+    by name."""
+    region = ["--height-attr", "HAUTEUR", "--region", REGION_ARG, "--effort", "fast"]
+    whole = tmp_path / "whole.vocc"
+    cli("bake", str(LYON), *region, "-o", str(whole))
+    shards = []
+    for i in range(2):
+        p = tmp_path / f"sh{i}.vocc"
+        cli("bake", str(LYON), *region, "--shard", f"{i}/2", "-o", str(p))
+        shards.append(p)
+    merged = vocc.merge(shards[::-1])
+    assert merged.to_bytes() == whole.read_bytes()
+    assert merged.hashes == (tmp_path / "whole.vocc.hashes").read_bytes()
+    assert merged.summary["shards"] == 2
+    with pytest.raises(vocc.VoccError, match="1 of 2 shards are missing: 1/2"):
+        vocc.merge(shards[:1])

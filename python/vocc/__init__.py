@@ -35,7 +35,7 @@ from . import _vocc
 from ._vocc import VoccError
 
 __version__ = _vocc.__version__
-__all__ = ["bake", "scene_boxes", "SceneBoxes", "Store", "BakedStore", "BoxTree", "VOs", "VoccError"]
+__all__ = ["bake", "merge", "scene_boxes", "SceneBoxes", "Store", "BakedStore", "BoxTree", "VOs", "VoccError"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 Progress = Callable[[int, int], object]
@@ -428,3 +428,21 @@ def bake(
 
 
 bake.__doc__ += _READER_DOC
+
+
+def merge(shards: Sequence[PathLike]) -> BakedStore:
+    """Merges the shards of one bake (``vocc bake --shard I/N``, each with its ``.hashes`` file
+    beside it) into the store a single bake writes, as ``vocc merge`` does. Every index
+    ``0..N`` must be given once, all from one bake; a broken rule raises ``VoccError`` naming
+    it. The result's ``hashes`` serve ``vocc bake --reuse``; its ``summary`` holds ``shards``
+    and ``cells_from`` (cells taken from each shard, in the order given)."""
+    given = []
+    for p in _paths(shards):
+        with open(p, "rb") as f:
+            store = f.read()
+        with open(p + ".hashes", "rb") as f:
+            hashes = f.read()
+        given.append((store, hashes))
+    store, hashes, count, cells_from = _vocc.merge_shards(given)
+    summary = {"shards": count, "cells_from": list(cells_from)}
+    return BakedStore(_vocc.RawStore(store), hashes, summary)

@@ -60,7 +60,7 @@ pub struct CellHashes {
 }
 
 /// Why a `.hashes` file was refused.
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq, Eq)]
 pub enum HashesError {
     #[error("not a vocc hashes file (bad magic)")]
     Magic,
@@ -70,6 +70,9 @@ pub enum HashesError {
     Length { got: usize, want: usize },
     #[error("hashes file checksum mismatch: the file is damaged")]
     Checksum,
+    /// The rule that a shard's index is below the shard count (`--shard I/N` takes `I < N`).
+    #[error("hashes file records shard {index} of {count}: a shard index must be below the count")]
+    ShardIndex { index: u32, count: u32 },
 }
 
 /// The text of every bake option but the cell selection, as the global hash takes it: the
@@ -77,20 +80,38 @@ pub enum HashesError {
 /// refuse every older bake's reuse). `search_m` is printed inside the growth's parameters, where
 /// it stood then ([`GrowKey`]).
 fn options_key(p: &BakeParams) -> String {
+    // Every field by name, without `..`: a field added to `BakeParams` does not compile until it
+    // is placed here (in the key, or named as cell selection).
+    let BakeParams {
+        cell_size,
+        eye,
+        slices,
+        max_vos,
+        region: _,
+        walkable: _,
+        search_m,
+        grow,
+        generator,
+        weigh_m,
+        map,
+        propose,
+        budget,
+        far,
+    } = p;
     format!(
         "{:?}",
         (
-            p.cell_size,
-            p.eye,
-            p.slices,
-            p.max_vos,
-            GrowKey(&p.grow, p.search_m),
-            p.generator,
-            p.weigh_m,
-            p.map,
-            p.propose,
-            p.budget,
-            p.far
+            cell_size,
+            eye,
+            slices,
+            max_vos,
+            GrowKey(grow, *search_m),
+            generator,
+            weigh_m,
+            map,
+            propose,
+            budget,
+            far
         )
     )
 }
@@ -298,6 +319,9 @@ impl CellHashes {
         b
     }
 
+    /// The hashes in the file form [`Self::encode`] writes (or version 1). Refuses, naming the
+    /// rule: another magic, another version, a length other than the header's cell count says, a
+    /// wrong checksum, and a shard index at or above the shard count.
     pub fn decode(b: &[u8]) -> Result<CellHashes, HashesError> {
         if b.len() < HEADER_LEN_V1 + 4 || b[..8] != MAGIC {
             return Err(HashesError::Magic);
@@ -328,6 +352,11 @@ impl CellHashes {
             return Err(HashesError::Checksum);
         }
         let shard = (head == HEADER_LEN && u32_at(32) != 0).then(|| (u32_at(28), u32_at(32)));
+        if let Some((index, count)) = shard {
+            if index >= count {
+                return Err(HashesError::ShardIndex { index, count });
+            }
+        }
         Ok(CellHashes {
             global: u64_at(20),
             cells: (0..n).map(|i| u64_at(head + 8 * i)).collect(),

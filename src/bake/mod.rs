@@ -31,6 +31,7 @@ pub mod hidden;
 pub mod incremental;
 pub mod job;
 pub mod long;
+pub mod merge;
 pub mod occludees;
 pub mod params;
 pub mod plan;

@@ -16,7 +16,7 @@ use crate::runtime::frame::{CellView, VoGeom};
 use crate::runtime::occlusion::PreparedVo;
 
 /// Subtrees partly hidden by a VO that look smaller than this from the cell, radians, are
-/// passed over whole when a VO is weighed ([`BoxTree::hidden_runs`]): a subtree of buildings
+/// passed over whole when a VO is weighed (`BoxTree::hidden_runs`): a subtree of buildings
 /// 2 km away on the edge of an umbra, 20 m across, weighs nothing rather than being walked box
 /// by box. It only lowers weights, and decides nothing.
 pub const WEIGH_MIN_ANGLE: f64 = 0.01;
@@ -31,7 +31,7 @@ pub struct Occludees {
     /// The same costs as prefix sums.
     pub costs: Costs,
     /// Subtrees partly hidden that look smaller than this from the cell, radians, are passed
-    /// over whole when weighing ([`BoxTree::hidden_runs`]): 0 weighs exactly.
+    /// over whole when weighing (`BoxTree::hidden_runs`): 0 weighs exactly.
     pub min_angle: f64,
     tree: BoxTree,
 }

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::bake::job::BakeJob;
+use crate::bake::job::{BakeJob, JobError};
 use crate::bake::params::{BakeParams, Effort, Generator, Slices};
 use crate::bake::plan::{CellBake, Plan};
 use crate::runtime::culler::BoxTree;
@@ -54,18 +54,32 @@ pub struct Baked {
 }
 
 /// Bakes `cells` (all of the plan's when `None`) into a store, on the current rayon pool
-/// ([`BakeJob`]).
-pub fn bake(scene: &Scene, params: BakeParams, cells: Option<&[CellId]>) -> Baked {
-    let mut job = BakeJob::new(scene, params).expect("valid bake parameters");
+/// ([`BakeJob`]). Refused parameters, cells outside the grid and a failed bake are the job's
+/// typed [`JobError`].
+pub fn bake(
+    scene: &Scene,
+    params: BakeParams,
+    cells: Option<&[CellId]>,
+) -> Result<Baked, JobError> {
+    let mut job = BakeJob::new(scene, params)?;
     if let Some(ids) = cells {
-        job = job.cells(ids).expect("cells of the grid");
+        job = job.cells(ids)?;
     }
-    let out = job.run(&|_| {}).expect("the bake runs");
-    Baked {
+    let out = job.run(&|_| {})?;
+    Ok(Baked {
         bytes: out.store,
         cells: out.cells,
         seconds: out.summary.timings.bake_s,
-    }
+    })
+}
+
+/// Why a dataset's section of the results could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error(transparent)]
+    Load(#[from] scene::LoadError),
+    #[error(transparent)]
+    Bake(#[from] JobError),
 }
 
 /// Per-cell bake times, ms: (median, p95).
@@ -190,7 +204,7 @@ pub fn dataset_section(
     p: &SuiteParams,
     img: &Path,
     progress: &dyn Fn(&str),
-) -> Result<String, scene::LoadError> {
+) -> Result<String, ReportError> {
     let s = scene::load(&d.files, &d.read)?;
     let caster = Caster::new(&s);
     let tree = BoxTree::new(&object_boxes(&s));
@@ -212,7 +226,7 @@ pub fn dataset_section(
 
     // The default bake, every cell.
     progress(&format!("{}: default bake", d.name));
-    let main = bake(&s, BakeParams::default(), None);
+    let main = bake(&s, BakeParams::default(), None)?;
     let store = Store::parse(&main.bytes).expect("valid store");
     let all = sample_cells(&store, None, p.seed);
     progress(&format!("{}: ground truth of {} cells", d.name, all.len()));
@@ -394,7 +408,7 @@ pub fn dataset_section(
         ..BakeParams::default()
     };
     bp.grow.single_object = true;
-    let base = bake(&s, bp, Some(&sample));
+    let base = bake(&s, bp, Some(&sample))?;
     let bstore = Store::parse(&base.bytes).expect("valid store");
     let sb = summarize(
         &s,
@@ -430,7 +444,7 @@ pub fn dataset_section(
     ];
     for (key, label, params) in variants {
         progress(&format!("{}: {key}", d.name));
-        let v = bake(&s, params, Some(&sample));
+        let v = bake(&s, params, Some(&sample))?;
         let st = Store::parse(&v.bytes).expect("valid store");
         let sv = summarize(&s, &eval_cells(&s, &st, &tree, &sample, &own_vs(&st)));
         let ms = bake_ms(&v.cells).0;
@@ -548,7 +562,7 @@ pub fn dataset_section(
                 ..BakeParams::default()
             },
             Some(&sample),
-        );
+        )?;
         let st = Store::parse(&v.bytes).expect("valid store");
         let sv = summarize(&s, &eval_cells(&s, &st, &tree, &sample, &own_vs(&st)));
         let ms = bake_ms(&v.cells).0;
@@ -591,7 +605,7 @@ pub fn dataset_section(
         } else {
             sample_cells(&grid_store, None, p.seed)
         };
-        let v = bake(&s, params, Some(&ids));
+        let v = bake(&s, params, Some(&ids))?;
         let st = Store::parse(&v.bytes).expect("valid store");
         let vs = if size == 100.0 {
             vs_all.clone()

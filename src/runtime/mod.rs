@@ -4,13 +4,14 @@
 //! local frame. Output: cell ids, a cell's virtual occluders, and the cell's PVS.
 //! Invariants: no dependency on the geometry stack; no panics on any input (NaN and out-of-grid
 //! positions give `None`, malformed bytes give an error); every culling decision is conservative
-//! (rule 3, [`occlusion`]). The one exception: [`BoxTree::new`] refuses more than `u32::MAX`
+//! (rule 3, [`PreparedVo::cover`]). The one exception: [`BoxTree::new`] refuses more than `u32::MAX`
 //! object boxes with a panic (object indices are `u32`).
 //!
 //! Modules: [`grid`] (cell ids), [`frame`] (what the bytes mean as geometry), [`format`] (the
 //! store file, cell blobs and the frame's bytes, specified in `docs/FORMAT.md`: 2.0 written,
 //! 1.0 still read), [`crc`],
-//! [`occlusion`] (rule 3) and [`culler`] (the PVS).
+//! `occlusion` (rule 3, crate-private: [`PreparedVo`] and [`Cover`] are its public face) and
+//! [`culler`] (the PVS).
 //!
 //! ## Use
 //! ```
@@ -53,13 +54,13 @@ pub mod culler;
 pub mod format;
 pub mod frame;
 pub mod grid;
-pub mod occlusion;
+pub(crate) mod occlusion;
 
 pub use culler::{pvs, BoxTree};
 pub use format::{
     decode_blob, decode_frame, encode_blob, encode_frame, encode_store, encode_store_with,
-    validate_frame, CellRecord, FormatError, SceneSection, Store, VoList,
+    validate_frame, CellRecord, FormatError, OwnedStore, SceneSection, Store, VoList,
 };
 pub use frame::{CellView, Frame, QPoint, QVo, VoGeom, MAX_VOS_PER_CELL};
 pub use grid::{CellId, GridDescriptor};
-pub use occlusion::{Cover, PreparedVo};
+pub use occlusion::{hides, Cover, PreparedVo, MARGIN_M};

@@ -1,7 +1,9 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::SystemTime;
 
 use vocc::scene::{self, ReadOptions, Scene};
 
@@ -361,4 +363,56 @@ fn rect_segment_distance(r: [f64; 4], a: DVec2, b: DVec2) -> f64 {
         .map(|&c| to_seg(c))
         .chain([to_rect(a), to_rect(b)])
         .fold(f64::INFINITY, f64::min)
+}
+
+/// The `vocc` binary of the CLI package (cli/, `vocc-cli`), which `cargo test` at the root builds
+/// beside these tests (cargo gives `CARGO_BIN_EXE_*` to a package's own tests only). Panics,
+/// naming the command that builds it, when it is missing or older than a source file of the
+/// library or the CLI (`cargo test --test all ...` alone does not rebuild it).
+pub fn vocc_bin() -> &'static str {
+    static BIN: OnceLock<String> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let exe = std::env::current_exe().expect("the test binary's path");
+        // target/<profile>/deps/<test>-<hash>: the binary is in target/<profile>/.
+        let dir = exe
+            .parent()
+            .and_then(Path::parent)
+            .expect("the profile's target folder");
+        let bin = dir.join(format!("vocc{}", std::env::consts::EXE_SUFFIX));
+        let build =
+            "`cargo test` at the root builds it, or `cargo build --profile test -p vocc-cli`";
+        let built = std::fs::metadata(&bin)
+            .and_then(|m| m.modified())
+            .unwrap_or_else(|e| panic!("the CLI {} is missing ({e}): {build}", bin.display()));
+        let mut newest: Option<(SystemTime, PathBuf)> = None;
+        for d in ["src", "cli/src"] {
+            newest_file(&repo(d), &mut newest);
+        }
+        if let Some((t, p)) = newest {
+            assert!(
+                t <= built,
+                "the CLI {} is older than {}: {build}",
+                bin.display(),
+                p.display()
+            );
+        }
+        bin.to_string_lossy().into_owned()
+    })
+}
+
+/// The most recently modified file under `dir`.
+fn newest_file(dir: &Path, newest: &mut Option<(SystemTime, PathBuf)>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            newest_file(&p, newest);
+        } else if let Ok(t) = e.metadata().and_then(|m| m.modified()) {
+            if newest.as_ref().is_none_or(|(n, _)| t > *n) {
+                *newest = Some((t, p));
+            }
+        }
+    }
 }

@@ -39,7 +39,7 @@ pub mod store;
 pub use blob::{decode_blob, encode_blob};
 pub use frame::{decode_frame, encode_frame, validate_frame};
 pub use records::{CellGround, CellRecord, VoList};
-pub use store::{encode_store, encode_store_with, SceneSection, Store};
+pub use store::{encode_store, encode_store_with, OwnedStore, SceneSection, Store};
 
 /// Length of an encoded [`Frame`].
 pub const FRAME_LEN: usize = 112;

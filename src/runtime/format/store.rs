@@ -3,7 +3,8 @@
 //!
 //! Input: untrusted bytes of a whole store file (major 2 or 1), or a [`Frame`], one
 //! [`CellRecord`] per cell and a [`SceneSection`]. Output: a borrowed [`Store`] that answers
-//! per-cell queries, or the file's bytes (2.0).
+//! per-cell queries, an [`OwnedStore`] that keeps its bytes and lends a [`Store`] without
+//! checking them again, or the file's bytes (2.0).
 //! Invariants: [`Store::parse`] checks the rules of section 8.1 in order, once, in
 //! O(cells + VOs), allocating nothing; [`Store::cell`] then reads at most 63 index bytes and
 //! one record; [`encode_store_with`] writes only what `parse` accepts, canonically, in 2.0.
@@ -182,6 +183,55 @@ impl<'a> Store<'a> {
         Ok(store)
     }
 
+    /// Where the parts a [`Store`] borrows lie in its bytes, with what `parse` read: what an
+    /// [`OwnedStore`] keeps beside the bytes.
+    fn layout(&self) -> Layout {
+        Layout {
+            frame: self.frame,
+            version: self.version,
+            minor: self.minor,
+            cells: self.cells,
+            ground_byte: self.ground_byte,
+            objects: self.section.objects,
+            scene: self.section.scene,
+            crs_len: self.section.crs.len(),
+            index_offset: self.index_offset,
+            payload_offset: self.payload_offset,
+        }
+    }
+
+    /// The store `parse` accepted in `bytes` with layout `l`, without checking it again. Never
+    /// panics: a part outside `bytes` (which an accepted store's layout cannot give) reads empty.
+    fn view(bytes: &'a [u8], l: &Layout) -> Store<'a> {
+        let at = |a: u64, b: u64| -> &'a [u8] {
+            usize::try_from(a)
+                .ok()
+                .zip(usize::try_from(b).ok())
+                .and_then(|(a, b)| bytes.get(a..b))
+                .unwrap_or(&[])
+        };
+        let crs_start = (HEADER_LEN + SCENE_FIXED_LEN) as u64;
+        let crs = core::str::from_utf8(at(crs_start, crs_start + l.crs_len as u64)).unwrap_or("");
+        let index_end = l.index_offset + l.cells as u64;
+        Store {
+            frame: l.frame,
+            version: l.version,
+            minor: l.minor,
+            cells: l.cells,
+            ground_byte: l.ground_byte,
+            section: SceneSection {
+                objects: l.objects,
+                scene: l.scene,
+                crs,
+            },
+            index: at(l.index_offset, index_end),
+            blocks: at(index_end, l.payload_offset),
+            payload: at(l.payload_offset, bytes.len() as u64),
+            index_offset: l.index_offset,
+            payload_offset: l.payload_offset,
+        }
+    }
+
     /// S10: every index value is a count or [`SKIPPED`].
     fn check_index(&self) -> Result<(), FormatError> {
         for (i, &value) in self.index.iter().enumerate() {
@@ -357,6 +407,72 @@ impl<'a> Store<'a> {
     }
 }
 
+/// What an [`OwnedStore`] keeps of a parsed store besides its bytes.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    frame: Frame,
+    version: Version,
+    minor: u16,
+    cells: u32,
+    ground_byte: bool,
+    objects: u32,
+    scene: u64,
+    crs_len: usize,
+    index_offset: u64,
+    payload_offset: u64,
+}
+
+/// A parsed store that owns its bytes (a `Vec<u8>`, `Box<[u8]>`, `Arc<[u8]>`, or any
+/// `B: AsRef<[u8]>` that gives the same bytes each time it is asked, as those do): for a binding
+/// or an engine that keeps a store in a struct of its own. [`OwnedStore::parse`] checks the
+/// bytes once, as [`Store::parse`]; [`OwnedStore::store`] then lends a [`Store`] over them
+/// without checking them again (O(1)).
+///
+/// ```
+/// use vocc::runtime::{encode_store, CellRecord, Frame, GridDescriptor, OwnedStore};
+/// # fn main() -> Result<(), vocc::runtime::FormatError> {
+/// # let frame = Frame {
+/// #     origin: [0.0; 3],
+/// #     grid: GridDescriptor { min_x: 0.0, min_y: 0.0, cell_size: 100.0, nx: 2, ny: 1 },
+/// #     quantum: 0.5, eye_lo: 1.5, eye_hi: 2.0, ground_z0: 0.0, ground_step: 0.0,
+/// #     h0: 4.0, h_ratio: 1.25,
+/// # };
+/// let bytes: Vec<u8> = encode_store(&frame, &[CellRecord::EMPTY, CellRecord::Skipped])?;
+/// let owned = OwnedStore::parse(bytes)?; // no borrow: it can live in any struct
+/// assert_eq!(owned.store().cell_count(), 2);
+/// assert_eq!(owned.store().cell(1)?, CellRecord::Skipped);
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct OwnedStore<B = Vec<u8>> {
+    bytes: B,
+    layout: Layout,
+}
+
+impl<B: AsRef<[u8]>> OwnedStore<B> {
+    /// Checks a whole store file as [`Store::parse`] does and keeps its bytes.
+    pub fn parse(bytes: B) -> Result<OwnedStore<B>, FormatError> {
+        let layout = Store::parse(bytes.as_ref())?.layout();
+        Ok(OwnedStore { bytes, layout })
+    }
+
+    /// The store, borrowed from the bytes kept (no check is made again).
+    pub fn store(&self) -> Store<'_> {
+        Store::view(self.bytes.as_ref(), &self.layout)
+    }
+
+    /// The store file's bytes.
+    pub fn bytes(&self) -> &[u8] {
+        self.bytes.as_ref()
+    }
+
+    /// Gives the bytes back.
+    pub fn into_bytes(self) -> B {
+        self.bytes
+    }
+}
+
 /// Encodes a 2.0 store file with an empty scene section ([`SceneSection::NONE`]): `cells[i]` is
 /// the record of cell `i` (`cells.len() == nx * ny`).
 pub fn encode_store(frame: &Frame, cells: &[CellRecord]) -> Result<Vec<u8>, FormatError> {
@@ -463,5 +579,42 @@ mod tests {
                 cells: 143
             })
         );
+    }
+
+    /// An owned store answers as the borrowed one: every cell, the section, the byte counts.
+    #[test]
+    fn owned_store_lends_the_store_it_parsed() {
+        let f = frame(0.25, 13, 11);
+        let cells: Vec<CellRecord> = (0..143u16)
+            .map(|i| match i % 5 {
+                0 => CellRecord::Skipped,
+                1 => CellRecord::EMPTY,
+                k => CellRecord::new(i as u8, &[q(i, k, i + 1, 300, 3)]).unwrap(),
+            })
+            .collect();
+        let section = SceneSection {
+            objects: 2576,
+            scene: 0x0123_4567_89ab_cdef,
+            crs: "EPSG:3946",
+        };
+        let bytes = encode_store_with(&f, &cells, &section).unwrap();
+        let borrowed = Store::parse(&bytes).unwrap();
+        let owned = OwnedStore::parse(bytes.clone().into_boxed_slice()).unwrap();
+        let s = owned.store();
+        assert_eq!(s.scene_section(), section);
+        assert_eq!(s.version(), borrowed.version());
+        assert_eq!(s.frame(), borrowed.frame());
+        for id in 0..144 {
+            assert_eq!(s.cell(id), borrowed.cell(id), "cell {id}");
+            assert_eq!(s.cell_bytes(id), borrowed.cell_bytes(id), "cell {id}");
+        }
+        assert_eq!(owned.bytes(), &bytes[..]);
+        assert_eq!(&*owned.into_bytes(), &bytes[..]);
+        let mut bad = bytes;
+        bad[140] ^= 1;
+        assert!(matches!(
+            OwnedStore::parse(bad),
+            Err(FormatError::Checksum { .. })
+        ));
     }
 }

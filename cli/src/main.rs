@@ -25,6 +25,7 @@ mod boxes;
 mod eval;
 mod files;
 mod info;
+mod merge;
 mod progress;
 mod render;
 mod report;
@@ -398,7 +399,7 @@ fn run(cli: Cli) -> Result<i32> {
                 render::render_store(files, &read, &check, cell, at, radius, &output)
             }
         }
-        Command::Merge { shards, output } => store::merge(shards, &output),
+        Command::Merge { shards, output } => merge::merge(shards, &output),
         Command::Results(a) => eval::results(a),
         Command::GenCity {
             buildings,
