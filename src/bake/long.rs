@@ -344,7 +344,7 @@ fn trim<'b>(
             b
         } else {
             // Snapped along the segment, away from its middle.
-            let g = super::propose::VO_GRID_M;
+            let g = super::cell::VO_GRID_M;
             let p = a + u * (t + toward * g);
             (p / g).round() * g
         }
