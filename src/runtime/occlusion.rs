@@ -1,4 +1,4 @@
-//! Rule 3 (DESIGN.md section 3): is an occludee box hidden from a cell by one VO?
+//! Rule 3 (docs/DESIGN.md section 3): is an occludee box hidden from a cell by one VO?
 //!
 //! Input: a [`CellView`] (rectangle and eye heights), a [`VoGeom`] and a box
 //! `[xmin, ymin, zmin, xmax, ymax, zmax]`, all in the local frame.

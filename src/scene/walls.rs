@@ -1,4 +1,4 @@
-//! Walls: segment blockers from the vertical faces of any mesh (DESIGN.md section 4c).
+//! Walls: segment blockers from the vertical faces of any mesh (docs/DESIGN.md section 4c).
 //!
 //! Input: a polygon-face [`Mesh`] in local coordinates, closed or open, a polygon soup with
 //! duplicated or overlapping faces allowed. Output: [`WallPiece`]s, each a 2D segment `[a, b]`
