@@ -500,11 +500,10 @@ mod tests {
             for k in 1..ids.len().min(NEAREST_SORTED) {
                 assert!(d(k - 1) <= d(k));
             }
-            // `along` lists exactly the boxes meeting the stretch's box.
+            // `along` lists every box meeting the stretch's box.
             let e = par.at_or_below(END / 8, END / 16).unwrap().1;
             let (lo, hi) = (a.min(e), a.max(e));
-            for k in 0..ids.len() {
-                let (bl, bh) = boxes[k];
+            for (k, &(bl, bh)) in boxes.iter().enumerate() {
                 let meets = bl.x <= hi.x && bh.x >= lo.x && bl.y <= hi.y && bh.y >= lo.y;
                 if meets {
                     assert!(along.contains(&(k as u32)));
