@@ -76,7 +76,7 @@ pictures:
 	$(CARGO) test --locked --test all umbra_cases::
 	cp target/tmp/umbra-cases/fig3_staggered.svg docs/img/
 	$(CARGO) run --locked --release -- render --debug $(DEMO_SCENE) --height-attr HAUTEUR \
-		--at 1842000,5176050 -o docs/img/lyon_cell_100m.svg
+		--at 1842000,5176050 --generator growth -o docs/img/lyon_cell_100m.svg
 	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR -o target/lyon.vocc
 	$(CARGO) run --locked --release -- bake $(DEMO_SCENE) --height-attr HAUTEUR --generator growth \
 		-o target/lyon_growth.vocc

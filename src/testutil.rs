@@ -2,7 +2,8 @@
 //! sequence, the same numbers on every machine.
 //!
 //! Input: a seed. Output: the states in turn ([`Lcg::next_u64`]), uniform numbers in `[0, 1)`
-//! from their top 53 bits ([`Lcg::next`]) or in `[lo, hi)` ([`Lcg::range`]).
+//! from their top 53 bits ([`Lcg::next`]) or in `[lo, hi)` ([`Lcg::range`]). With the `bake`
+//! feature, also the small scenes of square buildings the bake's unit tests stand on ([`squares`]).
 
 /// The generator; its field is the state, the seed at first.
 pub(crate) struct Lcg(pub(crate) u64);
@@ -32,4 +33,32 @@ impl Lcg {
 pub(crate) fn uniform(seed: u64) -> impl FnMut(f64, f64) -> f64 {
     let mut g = Lcg(seed);
     move |lo, hi| g.range(lo, hi)
+}
+
+/// A scene of square buildings read from GeoJSON, each `([x, y, side], base, height)` in metres
+/// (its `h` and `b` attributes).
+#[cfg(feature = "bake")]
+pub(crate) fn squares(items: &[([f64; 3], f64, f64)]) -> crate::scene::Scene {
+    let feats: Vec<String> = items
+        .iter()
+        .map(|&([x, y, d], base, h)| {
+            format!(
+                r#"{{"type":"Feature","properties":{{"h":{h},"b":{base}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]]}}}}"#,
+                x + d,
+                x + d,
+                y + d,
+                y + d
+            )
+        })
+        .collect();
+    let text = format!(
+        r#"{{"type":"FeatureCollection","features":[{}]}}"#,
+        feats.join(",")
+    );
+    let opts = crate::scene::ReadOptions {
+        height_attr: Some("h".into()),
+        base_attr: Some("b".into()),
+        ..Default::default()
+    };
+    crate::scene::load_bytes(&[("squares.geojson".into(), text.as_bytes())], &opts).unwrap()
 }

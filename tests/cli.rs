@@ -106,6 +106,8 @@ fn render_debug_draws_a_lyon_cell_with_verified_vos() {
     let out = vocc(&[
         "render",
         "--debug",
+        "--generator",
+        "growth",
         LYON,
         "--height-attr",
         "HAUTEUR",
@@ -129,6 +131,41 @@ fn render_debug_draws_a_lyon_cell_with_verified_vos() {
     assert!(vos > 10, "{vos} VOs drawn");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("0 rejected by the verifier"), "{err}");
+}
+
+#[test]
+fn render_debug_draws_the_long_generators_trace_of_a_lyon_cell() {
+    let dir = common::temp_dir("cli_render_long");
+    let svg = dir.join("cell.svg");
+    let out = vocc(&[
+        "render",
+        "--debug",
+        LYON,
+        "--height-attr",
+        "HAUTEUR",
+        "--at",
+        "1842000,5176050",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"));
+    let count = |class: &str| text.matches(&format!(r#"class="{class}""#)).count();
+    assert_eq!(count("cell"), 1);
+    assert!(count("hidden") > 0 && count("blocker") > 0);
+    assert!(count("proposal") >= count("picked") && count("certified") > 0);
+    assert!((1..=10).contains(&count("picked")), "{}", count("picked"));
+    // The counts on stderr are the picture's.
+    let said = format!(
+        "{} proposals, {} certified pieces, {} VOs stored, {} picked",
+        count("proposal"),
+        count("certified"),
+        count("stored"),
+        count("picked")
+    );
+    assert!(err.contains(&said), "{err} against {said}");
 }
 
 #[test]

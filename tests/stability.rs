@@ -7,7 +7,7 @@
 //! Output: per case and offset, the scene's counts, the store's local frame and records, and each
 //! cell's PVS.
 //! Invariants checked:
-//! - conservativeness at every offset, with the oracles of DESIGN.md section 6: every stored VO,
+//! - conservativeness at every offset, with the oracles of docs/DESIGN.md section 6: every stored VO,
 //!   decoded from the bytes, passes rule 2, the exact verifier and the brute-force ray oracle
 //!   (`common::check_stored_vos`); rays from eye points to every stored VO meet real geometry
 //!   first (the 3D VO check); the ground-truth visible set lies inside the PVS;

@@ -14,14 +14,16 @@ use clap::{ArgGroup, Parser, Subcommand};
 use vocc::scene;
 
 use args::{
-    parse_buildings, parse_cell_size, parse_num, parse_positive, parse_xy, usage, ReadArgs,
-    SceneCheckArgs,
+    parse_buildings, parse_cell_size, parse_eye, parse_generator, parse_num, parse_positive,
+    parse_xy, usage, ReadArgs, SceneCheckArgs,
 };
 use files::write_atomically;
+use vocc::bake::params::Generator;
 
 mod args;
 mod bake;
 mod boxes;
+mod debug_svg;
 mod eval;
 mod files;
 mod info;
@@ -153,16 +155,26 @@ enum Command {
     ///
     /// `vocc render STORE SCENE... --cell ID -o cell.svg` draws the cell, its VOs and the
     /// buildings, coloured visible, culled thanks to fusion, or culled by single buildings alone
-    /// (like the paper's Fig. 8). `vocc render --debug SCENE... --at X,Y -o cell.svg` draws the
-    /// 2D growth of one slice (blockers, seeds, supporting and separating lines, the dense VOs).
+    /// (like the paper's Fig. 8). `vocc render --debug SCENE... --at X,Y -o cell.svg` draws what
+    /// the long generator does for that cell of the bake's grid (the hidden map, proposals,
+    /// certified pieces, stored and picked VOs); with `--generator growth`, the 2D growth of one
+    /// slice (blockers, seeds, supporting and separating lines, the dense VOs).
     #[command(after_help = "Examples:
   vocc render city.vocc city.geojson --height-attr height --cell 57 -o cell57.svg
   vocc render city.vocc city.geojson --height-attr height --at 1842000,5176050 --radius 400 -o cell.svg
-  vocc render --debug city.geojson --height-attr height --at 1842000,5176050 -o growth.svg")]
+  vocc render --debug city.geojson --height-attr height --at 1842000,5176050 -o long.svg
+  vocc render --debug city.geojson --height-attr height --at 1842000,5176050 --generator growth -o growth.svg")]
     Render {
-        /// Draw the growth of one slice instead.
+        /// Draw what a generator does for one cell instead (scene files only; the bake's grid).
         #[arg(long)]
         debug: bool,
+        /// --debug: the generator drawn: `long` (the default, as `vocc bake`: hidden map,
+        /// proposals, certified pieces, stored and picked VOs) or `growth` (one slice's growth).
+        #[arg(long, default_value = "long", value_parser = parse_generator)]
+        generator: Generator,
+        /// --debug: eye heights above the ground, metres, as `vocc bake --eye`.
+        #[arg(long, default_value = "1.5..2.0", value_parser = parse_eye, value_name = "LOW..HIGH", allow_hyphen_values = true)]
+        eye: (f64, f64),
         /// STORE then scene files; with --debug, scene files only.
         #[arg(required = true)]
         files: Vec<PathBuf>,
@@ -172,11 +184,11 @@ enum Command {
         /// A point of the cell, in world coordinates: X,Y.
         #[arg(long, value_name = "X,Y", value_parser = parse_xy, allow_hyphen_values = true)]
         at: Option<(f64, f64)>,
-        /// --debug: side of the square cells, metres (grid anchored at the scene's minimum
-        /// corner).
+        /// --debug: side of the square cells, metres (the bake's grid for that size).
         #[arg(long, default_value_t = 100.0, value_name = "M", value_parser = parse_cell_size, allow_hyphen_values = true)]
         cell_size: f64,
-        /// --debug: slice height in world metres (default: half the median building height).
+        /// --debug with `--generator growth`: slice height in world metres (default: half the
+        /// median building height).
         #[arg(long, value_name = "Z", value_parser = parse_num, allow_hyphen_values = true)]
         slice: Option<f64>,
         /// Store mode: metres shown around the cell's centre.
@@ -351,6 +363,8 @@ fn run(cli: Cli) -> Result<i32> {
         Command::Info { scene, read, json } => info::info(&scene, &read, json),
         Command::Render {
             debug,
+            generator,
+            eye,
             files,
             cell,
             at,
@@ -373,10 +387,10 @@ fn run(cli: Cli) -> Result<i32> {
                     return Err(usage(
                         "render",
                         ErrorKind::ArgumentConflict,
-                        "--debug takes --at X,Y, not --cell (it bakes no store; its grid is anchored at the scene)",
+                        "--debug takes --at X,Y, not --cell (it bakes no store)",
                     ));
                 }
-                render::render_debug(&files, &read, at, cell_size, slice, &output)
+                render::render_debug(&files, &read, at, cell_size, eye, generator, slice, &output)
             } else {
                 if files.len() < 2 {
                     return Err(usage(

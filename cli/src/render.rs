@@ -2,7 +2,8 @@
 //!
 //! Input: a store and its scene files (store mode), or scene files alone (`--debug`). Output: an
 //! SVG file, written atomically, and a one-line note on stderr. Invariant: drawing only; the
-//! store mode reads the cell as the runtime culler does, the debug mode runs the library's growth.
+//! store mode reads the cell as the runtime culler does; the debug mode runs a generator on one
+//! cell of the bake's own plan (the long generator's trace, or the growth).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -10,6 +11,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 
+use vocc::bake::job::BakeJob;
+use vocc::bake::params::{BakeParams, Generator};
 use vocc::runtime::culler::BoxTree;
 use vocc::runtime::CellId;
 use vocc::scene;
@@ -18,27 +21,68 @@ use crate::args::{ReadArgs, SceneCheckArgs};
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::store::{load_checked, which_cell};
 
-/// `vocc render --debug SCENE... --at X,Y`: the 2D growth of one slice of the cell holding the
-/// point, on a grid of `cell_size` anchored at the scene's minimum corner.
+/// `vocc render --debug SCENE... --at X,Y`: what a generator does for the cell holding the
+/// point, on the bake's own grid and parameters (the bake job's plan, with `cell_size`, `eye`
+/// and `generator` as `vocc bake` takes them). The long generator (the default): its trace
+/// (hidden map, proposals, certified pieces, stored and picked VOs, [`crate::debug_svg`]). The
+/// growth: the 2D growth of one slice (`slice`, world metres; default half the median height).
+#[allow(clippy::too_many_arguments)]
 pub fn render_debug(
     scene_files: &[PathBuf],
     read: &ReadArgs,
     at: (f64, f64),
     cell_size: f64,
+    eye: (f64, f64),
+    generator: Generator,
     slice: Option<f64>,
     output: &Path,
 ) -> Result<()> {
     let inputs: Vec<&Path> = scene_files.iter().map(PathBuf::as_path).collect();
     check_output(output, &inputs)?;
     let s = scene::load(scene_files, &read.options())?;
+    let params = BakeParams {
+        cell_size,
+        eye,
+        generator,
+        ..BakeParams::default()
+    };
+    let job = BakeJob::new(&s, params)?;
+    let plan = job.plan();
     let local = glam::DVec2::new(at.0 - s.origin.x, at.1 - s.origin.y);
+    let id = plan
+        .frame
+        .grid
+        .cell_at(local.x, local.y)
+        .with_context(|| format!("({}, {}) lies outside the bake's grid", at.0, at.1))?;
+    let cell = plan.cell_polygon(id);
+    let t = Instant::now();
+    if generator == Generator::Long {
+        let Some(trace) = vocc::bake::trace::trace_cell(plan, id) else {
+            anyhow::bail!(
+                "cell {id}: the long generator has nothing to do there (no eyes, no blocker that may support a VO, or inside a building)"
+            );
+        };
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let svg = crate::debug_svg::render(&trace);
+        write_atomically(output, |w| w.write_all(svg.as_bytes()))?;
+        eprintln!(
+            "cell {id} at ({:.1}, {:.1}) world: {} slices, {} proposals, {} certified pieces, {} VOs stored, {} picked, {ms:.1} ms; wrote {}",
+            cell[0].x + s.origin.x,
+            cell[0].y + s.origin.y,
+            trace.maps.len(),
+            trace.proposals.len(),
+            trace.certified.len(),
+            trace.stored.len(),
+            trace.picked.len(),
+            output.display()
+        );
+        return Ok(());
+    }
     let z = match slice {
         Some(z) => z - s.origin.z,
         None => vocc::bake::mid_slice(&s),
     };
     let set = vocc::bake::slice_blockers(&s, z);
-    let cell = vocc::bake::grid_cell(&s, local, cell_size);
-    let t = Instant::now();
     let out = vocc::bake::growth::dense::grow_cell(
         &cell,
         &set,
@@ -49,7 +93,7 @@ pub fn render_debug(
     let svg = vocc::bake::growth::svg::render(&cell, &set, &out, 0.1 * cell_size);
     write_atomically(output, |w| w.write_all(svg.as_bytes()))?;
     eprintln!(
-        "cell at ({:.1}, {:.1}) world, slice z = {:.1} m: {} blockers in the slice, {} seeds, {} dense VOs, {} rejected by the verifier, {ms:.1} ms; wrote {}",
+        "cell {id} at ({:.1}, {:.1}) world, slice z = {:.1} m: {} blockers in the slice, {} seeds, {} dense VOs, {} rejected by the verifier, {ms:.1} ms; wrote {}",
         cell[0].x + s.origin.x,
         cell[0].y + s.origin.y,
         z + s.origin.z,

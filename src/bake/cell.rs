@@ -6,7 +6,8 @@
 //! the slice levels ([`choose_levels`]); or, for a cell no generator needs to see, its record:
 //! empty (no blocker that may support a VO) or skipped (wholly inside a blocker standing above
 //! the eyes). [`usable`] is the blocker query both generators use; `CellSetup::finish` turns
-//! the VOs a generator picked into the cell's record.
+//! the VOs a generator picked into the cell's record. [`VO_GRID_M`] is the grid both generators'
+//! VO endpoints lie on.
 //! Invariants: a cell's setup reads only the blockers whose boxes meet `cell ± search_m` (within
 //! the reach, ARCHITECTURE.md invariant 13) and compares ids only; `near` is ascending, and
 //! `support` and `adjusted` are parallel to it; a record holds a ground byte only with VOs.
@@ -21,6 +22,11 @@ use crate::geom::predicates::{convex_interiors_disjoint, point_in_convex, Contai
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::{CellGround, CellView, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
+
+/// Both generators' VO endpoints (the long one's proposals, the growth's clipped VOs) lie on this
+/// grid, metres (2^-10 m): dyadic, so the verifier's bisection midpoints are exact and lie
+/// exactly on the segment (ARCHITECTURE.md invariant 8).
+pub const VO_GRID_M: f64 = 1.0 / 1024.0;
 
 /// The blockers the VOs of a cell may use: those whose boxes meet the cell grown by `search_m`
 /// (metres) on every side, not overlapping it; ascending ids.

@@ -30,7 +30,8 @@ use crate::geom::verify::{BlockerIndex, Verifier};
 use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
 
-/// Lower levels tried when a proposal fails at its own.
+/// Height levels tried for one proposal or VO before it is dropped: its own, then each lower one
+/// (both generators: [`Certifier::pieces`], [`Certifier::store`], and the growth's gate).
 pub const LEVEL_FALLBACKS: usize = 3;
 
 /// One cell's certification context.
@@ -386,4 +387,189 @@ pub struct Piece {
     pub a: DVec2,
     pub b: DVec2,
     pub used: Vec<u32>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bake::cell::CellSetup;
+    use crate::bake::long::certifier;
+    use crate::bake::params::BakeParams;
+    use crate::bake::plan::Plan;
+    use crate::geom::predicates::segment_meets_convex;
+    use crate::testutil::squares;
+
+    /// A row of 30 m squares, 60 m tall, from x = 100 to 400 at y = 160, with the squares of
+    /// `gaps` (their place in the row) left out, a low block behind it, and a tower 150 m tall
+    /// far off (the height levels reach the tallest building); the cell is `[200, 300) x [0, 100)`.
+    fn street(gaps: &[usize]) -> crate::scene::Scene {
+        let mut items: Vec<([f64; 3], f64, f64)> = (0..10)
+            .filter(|k| !gaps.contains(k))
+            .map(|k| ([100.0 + 30.0 * k as f64, 160.0, 30.0], 0.0, 60.0))
+            .collect();
+        items.push(([240.0, 400.0, 20.0], 0.0, 10.0));
+        items.push(([1400.0, 1400.0, 10.0], 0.0, 150.0));
+        // A hut at the corner: the grid starts at (0, 0).
+        items.push(([0.0, 0.0, 2.0], 0.0, 3.0));
+        squares(&items)
+    }
+
+    /// Runs `f` with the certifier of the cell holding `(250, 50)`.
+    fn with_certifier(scene: &crate::scene::Scene, f: impl FnOnce(&Certifier)) {
+        let plan = Plan::new(scene, BakeParams::default()).unwrap();
+        let id = plan.frame.grid.cell_at(250.0, 50.0).unwrap();
+        let setup = CellSetup::new(&plan, id).ok().unwrap();
+        let index = BlockerIndex::new(
+            setup
+                .near
+                .iter()
+                .map(|&i| plan.set.polys[i as usize].as_slice()),
+        );
+        f(&certifier(&plan, &setup, &index));
+    }
+
+    /// The highest level whose VO top stands no higher than `top`.
+    fn level_under(c: &Certifier, top: f64) -> u8 {
+        let e1 = c.heights.1;
+        (1..HEIGHT_LEVELS)
+            .rev()
+            .find(|&l| c.frame.vo_top(e1, l) <= top)
+            .unwrap()
+    }
+
+    /// The 3D oracle: the segment from an eye `(p, e)` to a point `(x, z)` passes through the
+    /// prism of one of the blockers (clipped in 2D, its height checked over the clipped part).
+    fn blocked(p: DVec2, e: f64, x: DVec2, z: f64, blockers: &[(&[DVec2], Support)]) -> bool {
+        blockers.iter().any(|(poly, s)| {
+            let d = x - p;
+            let (mut t0, mut t1) = (0.0f64, 1.0f64);
+            let n = poly.len();
+            for i in 0..n {
+                let (u, w) = (poly[i], poly[(i + 1) % n]);
+                let (f0, fd) = ((w - u).perp_dot(p - u), (w - u).perp_dot(d));
+                if fd == 0.0 {
+                    if f0 < 0.0 {
+                        return false;
+                    }
+                } else if fd > 0.0 {
+                    t0 = t0.max(-f0 / fd);
+                } else {
+                    t1 = t1.min(-f0 / fd);
+                }
+            }
+            let (h0, h1) = (e + t0 * (z - e), e + t1 * (z - e));
+            t0 <= t1 && h0.min(h1) <= s.top && h0.max(h1) >= s.base
+        })
+    }
+
+    /// Every sampled ray from an eye of the cell to the quad standing on `a`–`b` from `g` to
+    /// `h` is blocked by `blockers`.
+    fn assert_quad_hidden(c: &Certifier, a: DVec2, b: DVec2, g: f64, h: f64, blockers: &[u32]) {
+        let (e0, e1, _) = c.heights;
+        let bl: Vec<(&[DVec2], Support)> =
+            blockers.iter().map(|&i| c.blockers[i as usize]).collect();
+        let (lo, hi) = (c.cell[0], c.cell[2]);
+        for i in 0..=4 {
+            for j in 0..=4 {
+                let p = lo
+                    + (hi - lo) * DVec2::new(i as f64, j as f64) * (0.999 / 4.0)
+                    + (hi - lo) * 0.0005;
+                for e in [e0 + 1e-6, (e0 + e1) / 2.0, e1 - 1e-6] {
+                    for k in 0..=16 {
+                        let x = a + (b - a) * (k as f64 / 16.0);
+                        for z in [g + 1e-6, (g + h) / 2.0, h - 1e-6] {
+                            assert!(blocked(p, e, x, z, &bl), "{p} {e} -> {x} {z}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_proposal_behind_a_row_is_certified_stored_and_hidden_in_3d() {
+        with_certifier(&street(&[]), |c| {
+            let level = level_under(c, 50.0);
+            let (a, b) = (DVec2::new(150.0, 250.0), DVec2::new(350.0, 250.0));
+            let mut stats = CertifyStats::default();
+            let pieces = c.pieces(level, a, b, &mut stats);
+            // The whole proposal, at its own level, hidden by the row alone.
+            assert_eq!(pieces.len(), 1, "{pieces:?}");
+            let p = &pieces[0];
+            assert_eq!((p.level, p.a, p.b), (level, a, b));
+            let (e0, e1, g) = c.heights;
+            for &i in &p.used {
+                let s = c.blockers[i as usize].1;
+                assert!(s.top == 60.0 && s.supports(e0, e1, g, c.frame.vo_top(e1, level), 150.0));
+            }
+            assert_quad_hidden(c, p.a, p.b, g, c.frame.vo_top(e1, level), &p.used);
+            // Stored: what the runtime reads back is hidden too, by the cell's blockers.
+            let s = c.store(p, &mut stats).unwrap();
+            assert!(s.q.level >= level, "raised, never lowered: {:?}", s.q);
+            assert!(s.geom.h >= e1 && s.geom.g <= e0);
+            let all: Vec<u32> = (0..c.blockers.len() as u32).collect();
+            let (ga, gb) = (DVec2::from(s.geom.a), DVec2::from(s.geom.b));
+            assert_quad_hidden(c, ga, gb, s.geom.g, s.geom.h, &all);
+            assert_eq!((stats.tried, stats.stores, stats.stored), (1, 1, 1));
+        });
+    }
+
+    /// With squares of the row removed, no certified piece reaches into what the gap shows,
+    /// and too low a row certifies nothing at a level above it.
+    #[test]
+    fn a_certificate_is_refused_where_its_blocker_is_removed() {
+        let (a, b) = (DVec2::new(150.0, 250.0), DVec2::new(350.0, 250.0));
+        with_certifier(&street(&[4, 5]), |c| {
+            let level = level_under(c, 50.0);
+            let pieces = c.pieces(level, a, b, &mut CertifyStats::default());
+            let polys: Vec<&[DVec2]> = c.blockers.iter().map(|b| b.0).collect();
+            let total: f64 = pieces.iter().map(|p| p.a.distance(p.b)).sum();
+            assert!(total < 0.9 * a.distance(b), "{pieces:?}");
+            for p in &pieces {
+                for k in 0..=32 {
+                    let x = p.a + (p.b - p.a) * (k as f64 / 32.0);
+                    // Every segment from the cell's corners and middle to x meets the row.
+                    for i in 0..=8 {
+                        let s = c.cell[0] + (c.cell[2] - c.cell[0]) * (i as f64 / 8.0);
+                        let t = c.cell[1] + (c.cell[3] - c.cell[1]) * (i as f64 / 8.0);
+                        for q in [s, t] {
+                            assert!(polys.iter().any(|b| segment_meets_convex(q, x, b)), "{x}");
+                        }
+                    }
+                }
+            }
+        });
+        // The whole row, but VOs above its top (at the proposal's level and every fallback):
+        // its blockers do not support them (rule 2, the ratio at its cap of 1 this far out).
+        with_certifier(&street(&[]), |c| {
+            let e1 = c.heights.1;
+            let above = (1..HEIGHT_LEVELS)
+                .find(|&l| c.frame.vo_top(e1, l) > 61.0)
+                .unwrap();
+            let level = above + LEVEL_FALLBACKS as u8 - 1;
+            assert!(
+                level < HEIGHT_LEVELS,
+                "the levels reach {}",
+                c.frame.vo_top(e1, 31)
+            );
+            assert!(c
+                .pieces(level, a, b, &mut CertifyStats::default())
+                .is_empty());
+            assert!(!c
+                .pieces(above - 1, a, b, &mut CertifyStats::default())
+                .is_empty());
+        });
+    }
+
+    #[test]
+    fn bands_grow_with_distance() {
+        assert_eq!(band_of(0.0), 0);
+        assert_eq!(band_of(BAND0_M - 1.0), 0);
+        assert_eq!(band_of(BAND0_M), 1);
+        for k in 1..BANDS {
+            assert_eq!(band_of(band_floor(k)), k);
+            assert!(band_floor(k) > band_floor(k - 1));
+        }
+        assert_eq!(band_of(1e9), BANDS - 1);
+    }
 }

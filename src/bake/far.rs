@@ -165,6 +165,7 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
         plan.params.weigh_m,
         &mut t,
         &mut stats,
+        &mut |_| {},
     );
     let index = BlockerIndex::new(
         setup

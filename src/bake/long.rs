@@ -33,6 +33,30 @@ use crate::runtime::frame::{QVo, VoGeom, HEIGHT_LEVELS};
 /// rule-3 weights; with them the far pieces of the cell's block ([`super::far`]); greedy picks,
 /// each certified exactly when picked. Returns the cell's record.
 pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) -> CellRecord {
+    long_vos_traced(plan, setup, stats, &mut |_| {})
+}
+
+/// What the long generator did for one cell, told as it happens to [`long_vos_traced`]'s
+/// observer (for pictures, [`super::trace`]); telling decides nothing.
+pub enum Traced<'a> {
+    /// A slice's hidden map, with the slice's height level.
+    Map(u8, &'a super::hidden::HiddenMap),
+    /// A proposal as weighed, trimmed: its level and ends.
+    Proposal(u8, DVec2, DVec2),
+    /// The certified pieces of a proposal the selection certified.
+    Certified(&'a [Piece]),
+    /// A VO stored (certified again in its dequantized form): as the runtime reads it.
+    Stored(&'a VoGeom),
+}
+
+/// [`long_vos`], telling `observe` what it does: the maps, the proposals, what the selection
+/// certified and stored (the bake passes an observer that does nothing).
+pub(super) fn long_vos_traced(
+    plan: &Plan,
+    setup: &CellSetup,
+    stats: &mut CellStats,
+    observe: &mut impl FnMut(Traced),
+) -> CellRecord {
     let f = &plan.frame;
     let (g, e1, view) = (setup.g, setup.view.e1, setup.view);
     let radius = plan.params.weigh_m;
@@ -45,7 +69,11 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
         plan.params.weigh_m,
         &mut t,
         stats,
+        observe,
     );
+    for &(level, a, b) in &cands {
+        observe(Traced::Proposal(level, a, b));
+    }
     stats.dense = cands.len();
     let index = BlockerIndex::new(
         setup
@@ -103,21 +131,25 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
         plan.params.max_vos,
         plan.params.budget,
         |c| match &c.value {
-            Vo::Piece(p) if c.stage == Stage::Proposed => certifier
-                .pieces(p.level, p.a, p.b, &mut cs)
-                .into_iter()
-                .map(|p| Candidate {
-                    stage: Stage::Certified,
-                    hidden: plan.occludees.hidden(
-                        &view,
-                        &geom(p.level, p.a, p.b),
-                        plan.params.weigh_m,
-                    ),
-                    value: Vo::Piece(p),
-                })
-                .collect(),
+            Vo::Piece(p) if c.stage == Stage::Proposed => {
+                let pieces = certifier.pieces(p.level, p.a, p.b, &mut cs);
+                observe(Traced::Certified(&pieces));
+                pieces
+                    .into_iter()
+                    .map(|p| Candidate {
+                        stage: Stage::Certified,
+                        hidden: plan.occludees.hidden(
+                            &view,
+                            &geom(p.level, p.a, p.b),
+                            plan.params.weigh_m,
+                        ),
+                        value: Vo::Piece(p),
+                    })
+                    .collect()
+            }
             Vo::Piece(p) => certifier
                 .store(p, &mut cs)
+                .inspect(|s| observe(Traced::Stored(&s.geom)))
                 .map(|s| Candidate {
                     stage: Stage::Stored,
                     value: Vo::Stored(s.q, geom(p.level, p.a, p.b)),
@@ -127,6 +159,7 @@ pub(super) fn long_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) ->
                 .collect(),
             Vo::Far(i) => certifier
                 .store_far(&far[*i], &mut cs)
+                .inspect(|s| observe(Traced::Stored(&s.geom)))
                 .map(|s| Candidate {
                     stage: Stage::Stored,
                     value: Vo::Stored(s.q, s.geom),
@@ -165,7 +198,8 @@ fn clock(t: &mut Instant) -> f64 {
 /// The first stages of the long generator for a region's setup (a cell's, or a block's): per
 /// slice the hidden map and its long runs, each weighed by rule 3 from the region and trimmed
 /// to what its occludees need. Proposals `(level, a, b)` with what each hides, in a fixed order;
-/// stage times go to `stats` (maps, proposals, weights).
+/// stage times go to `stats` (maps, proposals, weights); each map is shown to `observe`.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn proposals(
     plan: &Plan,
     setup: &CellSetup,
@@ -174,6 +208,7 @@ pub(super) fn proposals(
     radius: f64,
     t: &mut Instant,
     stats: &mut CellStats,
+    observe: &mut impl FnMut(Traced),
 ) -> (Vec<(u8, DVec2, DVec2)>, Vec<Spans>) {
     let CellSetup {
         view,
@@ -206,6 +241,7 @@ pub(super) fn proposals(
         let maps = super::hidden::HiddenMap::build_slices(cell, &edges, &member, chunk.len(), map);
         stats.stage_ms[0] += clock(t);
         for (&k, map) in chunk.iter().zip(&maps) {
+            observe(Traced::Map(k, map));
             let props = super::propose::runs(cell, map, propose);
             all_props.extend(props.into_iter().map(|p| (k, p.a, p.b)));
         }
@@ -344,7 +380,7 @@ fn trim<'b>(
             b
         } else {
             // Snapped along the segment, away from its middle.
-            let g = super::propose::VO_GRID_M;
+            let g = super::cell::VO_GRID_M;
             let p = a + u * (t + toward * g);
             (p / g).round() * g
         }

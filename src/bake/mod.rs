@@ -41,6 +41,7 @@ pub mod select;
 pub mod slice;
 pub mod spans;
 pub mod terrain;
+pub mod trace;
 
 use glam::DVec2;
 use rstar::primitives::{GeomWithData, Rectangle};

@@ -468,32 +468,7 @@ pub fn encode(frame: &Frame, baked: &[CellBake]) -> Result<Vec<u8>, FormatError>
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Square footprints `[x, y, side]` (world metres) with bases and heights, as GeoJSON.
-    fn squares(items: &[([f64; 3], f64, f64)]) -> Scene {
-        let feats: Vec<String> = items
-            .iter()
-            .map(|&([x, y, d], base, h)| {
-                format!(
-                    r#"{{"type":"Feature","properties":{{"h":{h},"b":{base}}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{},{y}],[{},{}],[{x},{}],[{x},{y}]]]}}}}"#,
-                    x + d,
-                    x + d,
-                    y + d,
-                    y + d
-                )
-            })
-            .collect();
-        let text = format!(
-            r#"{{"type":"FeatureCollection","features":[{}]}}"#,
-            feats.join(",")
-        );
-        let opts = crate::scene::ReadOptions {
-            height_attr: Some("h".into()),
-            base_attr: Some("b".into()),
-            ..Default::default()
-        };
-        crate::scene::load_bytes(&[("squares.geojson".into(), text.as_bytes())], &opts).unwrap()
-    }
+    use crate::testutil::squares;
 
     /// The regression: a cell with no building within 50 m stood on the scene's lowest ground
     /// (level 0), under the bases of the buildings around it, whose VOs then failed rule 2's base

@@ -6,7 +6,7 @@
 //! ranked within each direction by the angle their umbra opens at infinity.
 //! Why long runs: a VO shorter than the cell is wide has a closed triangular umbra; a longer one
 //! has a wedge that widens behind it, and the good VOs run through blocks and across the streets
-//! the cell cannot see down (DESIGN.md 4b). Lines at every direction and offset are sampled at
+//! the cell cannot see down (docs/DESIGN.md 4b). Lines at every direction and offset are sampled at
 //! the map's pixel size; a run breaks at the first visible pixel.
 //! Invariant: a proposal only; [`super::certify`] decides with the exact verifier.
 
@@ -14,9 +14,7 @@ use glam::DVec2;
 
 use super::hidden::HiddenMap;
 
-/// Proposed endpoints lie on this grid, metres (2^-10 m): dyadic, so the verifier's bisection
-/// midpoints are exact and lie exactly on the segment (ARCHITECTURE.md invariant 8).
-pub const VO_GRID_M: f64 = 1.0 / 1024.0;
+use super::cell::VO_GRID_M;
 
 fn snap(p: DVec2) -> DVec2 {
     (p / VO_GRID_M).round() * VO_GRID_M

@@ -1,4 +1,4 @@
-//! Quantization: a VO to its 5 stored bytes, conservatively (DESIGN.md section 4.5).
+//! Quantization: a VO to its 5 stored bytes, conservatively (docs/DESIGN.md section 4.5).
 //!
 //! Input: a VO segment `a`–`b` of one cell (local frame), its height level, the store's
 //! [`Frame`], and a `check` that decides whether a segment is hidden (the bake passes the exact

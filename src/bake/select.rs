@@ -1,5 +1,5 @@
 //! Selection: from a cell's proposals to at most `max_vos` stored VOs, most effective first
-//! (DESIGN.md section 4.4, the paper's Fig. 6), certifying only what it is about to pick.
+//! (docs/DESIGN.md section 4.4, the paper's Fig. 6), certifying only what it is about to pick.
 //!
 //! Input: candidates, each with the occludees it hides on its own (rule 3, the runtime's own
 //! test, so a weight is what the runtime will cull) and the occludees' costs; a `refine` step
@@ -10,7 +10,7 @@
 //! it goes back with the true one. A fresh candidate that is not yet stored is refined: a
 //! proposal becomes its certified hidden pieces, a piece its quantized, re-checked VO, each with
 //! the occludees it really hides, and they go back into the queue. A fresh stored VO is picked.
-//! Picking stops at `max_vos`, or when the best gain falls below [`MIN_GAIN_SHARE`] of what is
+//! Picking stops at `max_vos`, or when the best gain falls below [`SELECT_MIN_GAIN_SHARE`] of what is
 //! already hidden (five more bytes and a test per box at run time no longer pay).
 //! Invariants: deterministic (ties broken by insertion order); only candidates that `refine`
 //! returned as stored are ever picked; refining a candidate can only shrink what it hides, and
@@ -21,12 +21,12 @@ use std::collections::BinaryHeap;
 
 use super::spans::{Costs, Spans};
 
-/// Stop when the best remaining gain is below this share of the cost already hidden. It sets
+/// The long generator's selection stops when the best remaining gain is below this share of the cost already hidden. It sets
 /// the bytes per cell: on Tokyo's 961 cells 0.002 stores 9.1 VOs a cell (55.7 bytes with the
 /// index, over the 52 allowed), 0.003 8.4 (51.7 bytes, 91.2% culled on 20 cells), 0.004 7.8
 /// (47.9 bytes, 91.0%); Lyon 50.9 and 47.4 bytes. 0.004 leaves room for a city with more far
 /// field than these two.
-pub const MIN_GAIN_SHARE: f64 = 0.004;
+pub const SELECT_MIN_GAIN_SHARE: f64 = 0.004;
 
 /// How far a candidate has come.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -111,7 +111,7 @@ pub fn select<T>(
             }
             continue;
         }
-        if (g as f64) < MIN_GAIN_SHARE * hidden_cost as f64 {
+        if (g as f64) < SELECT_MIN_GAIN_SHARE * hidden_cost as f64 {
             break;
         }
         let c = all[top.idx].take().expect("checked above");
@@ -193,7 +193,7 @@ mod tests {
     #[test]
     fn diminishing_gain_stops_the_picks() {
         let c = vec![stored(0, vec![0]), stored(1, vec![1])];
-        // 1 more after 1000 is below MIN_GAIN_SHARE (0.4%); 5 more is above it.
+        // 1 more after 1000 is below SELECT_MIN_GAIN_SHARE (0.4%); 5 more is above it.
         let cost = Costs::new(&[1000, 1]);
         assert_eq!(
             select(c.clone(), &cost, Spans::new(), 10, 100, |_| vec![]),

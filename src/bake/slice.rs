@@ -4,7 +4,7 @@
 //! blockers near it with their base and top. Output: the slice levels (VO height levels of the
 //! store's frame), and for each VO the blockers that support it by rule 2.
 //! Invariants:
-//! - rule 2 (DESIGN.md section 3) decides support: with `lambda` a bound of the fraction of a
+//! - rule 2 (docs/DESIGN.md section 3) decides support: with `lambda` a bound of the fraction of a
 //!   ray's 2D length at which it crosses the blocker, `t >= e1 + lambda (h - e1)` and
 //!   `b <= min(e0, g)` or `b <= e0 - lambda (e0 - g)`, with
 //!   `lambda = min(1, d_far(B) / d_near(s))` (proof in ARCHITECTURE.md, "Rules 2 and 3");

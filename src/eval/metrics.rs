@@ -193,7 +193,7 @@ pub fn pvs_from_geoms(
         .collect()
 }
 
-/// The 3D check of a cell's stored VOs (DESIGN.md section 6.2): rays from sampled eye points of
+/// The 3D check of a cell's stored VOs (docs/DESIGN.md section 6.2): rays from sampled eye points of
 /// the cell to sampled points of every stored VO quad must hit the original geometry before they
 /// reach the VO. This checks rule 2 (and rule 1) end to end, with the ray caster of the ground
 /// truth, on the VOs as the runtime decodes them.

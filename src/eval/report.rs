@@ -251,7 +251,7 @@ pub fn dataset_section(
     row(&mut md, "vocc, 10 VOs", &sm, "");
     let _ = writeln!(
         md,
-        "\n3D check of the stored VOs (DESIGN.md 6.2): {} rays from 16 eye points per cell to 16 points of each VO quad; {} reached a VO without meeting the original geometry first.",
+        "\n3D check of the stored VOs (docs/DESIGN.md 6.2): {} rays from 16 eye points per cell to 16 points of each VO quad; {} reached a VO without meeting the original geometry first.",
         rays.rays, rays.reached
     );
     let _ = writeln!(
@@ -641,7 +641,7 @@ pub fn dataset_section(
     }
     let _ = writeln!(
         md,
-        "\n3D check of the stored VOs at each size (DESIGN.md 6.2; 16 eye points per cell to 16 points of each VO quad): {}.",
+        "\n3D check of the stored VOs at each size (docs/DESIGN.md 6.2; 16 eye points per cell to 16 points of each VO quad): {}.",
         size_rays
             .iter()
             .map(|(size, r)| format!(

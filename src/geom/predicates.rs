@@ -9,7 +9,7 @@
 //! ## Convex pieces, segments included
 //! A *convex piece* is either a strictly convex counter-clockwise polygon (3 or more vertices,
 //! non-zero area) or a *segment*: exactly 2 distinct vertices, the closed segment between them
-//! (a wall seen from above, DESIGN.md section 4c). A segment is a degenerate convex set with an
+//! (a wall seen from above, docs/DESIGN.md section 4c). A segment is a degenerate convex set with an
 //! empty interior: every point of it is a boundary point. Every predicate below that takes a
 //! "convex polygon" accepts both kinds and answers exactly for the closed set: for a segment,
 //! [`point_in_convex`] is `Boundary` on it and `Outside` off it (a point on its line beyond its

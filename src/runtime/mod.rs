@@ -4,8 +4,9 @@
 //! local frame. Output: cell ids, a cell's virtual occluders, and the cell's PVS.
 //! Invariants: no dependency on the geometry stack; no panics on any input (NaN and out-of-grid
 //! positions give `None`, malformed bytes give an error); every culling decision is conservative
-//! (rule 3, [`PreparedVo::cover`]). The one exception: [`BoxTree::new`] refuses more than `u32::MAX`
-//! object boxes with a panic (object indices are `u32`).
+//! (rule 3, [`PreparedVo::cover`]). The one exception: [`BoxTree::new`] refuses more than `MAX_BOXES`
+//! = 268,435,455 object boxes with a panic (`runtime/culler/tree.rs`: a node's link keeps 29 bits for
+//! the index of its first child, and a tree over `n` boxes has at most `2n - 1` nodes).
 //!
 //! Modules: [`grid`] (cell ids), [`frame`] (what the bytes mean as geometry), [`format`] (the
 //! store file, cell blobs and the frame's bytes, specified in `docs/FORMAT.md`: 2.0 written,

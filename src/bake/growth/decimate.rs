@@ -1,5 +1,5 @@
 //! Decimation: from the dense VO set of a cell to at most `max_vos`, most effective first
-//! (DESIGN.md section 4.4, the paper's Fig. 6).
+//! (docs/DESIGN.md section 4.4, the paper's Fig. 6).
 //!
 //! Input: candidate VOs with the occludees each hides on its own (rule 3, the runtime's own
 //! test, so the weight is what the runtime will cull), the occludees' costs, and an `accept`
@@ -8,7 +8,7 @@
 //! Rule: greedy by weight. The weight of a candidate is the summed cost (triangles) of the
 //! occludees it hides that no VO picked before hides (the overlap correction). Pick the heaviest,
 //! pass it through `accept`, and recompute its gain from what the accepted VO really hides. Stop
-//! at `max_vos`, or when the best gain falls below [`MIN_GAIN_SHARE`] of what is already hidden
+//! at `max_vos`, or when the best gain falls below [`DECIMATE_MIN_GAIN_SHARE`] of what is already hidden
 //! (the gain no longer pays for five more bytes and a test per box at run time).
 //! Invariants: deterministic (ties broken by candidate order); gains only shrink as VOs are
 //! picked, so a lazy max-heap gives the same picks as a full rescan.
@@ -18,8 +18,10 @@ use std::collections::BinaryHeap;
 
 use crate::bake::spans::{Costs, Spans};
 
-/// Stop when the best remaining gain is below this share of the cost already hidden.
-pub const MIN_GAIN_SHARE: f64 = 0.01;
+/// The growth's decimation stops when the best remaining gain is below this share (1%) of the
+/// occludee cost already hidden. Not the long generator's [`crate::bake::select::SELECT_MIN_GAIN_SHARE`]
+/// (0.4%): the growth's dense sets hold many near-duplicates whose small gains it drops.
+pub const DECIMATE_MIN_GAIN_SHARE: f64 = 0.01;
 
 #[derive(PartialEq, Eq)]
 struct Entry {
@@ -74,7 +76,7 @@ pub fn greedy<T>(
             }
             continue;
         }
-        if (g as f64) < MIN_GAIN_SHARE * hidden_cost as f64 {
+        if (g as f64) < DECIMATE_MIN_GAIN_SHARE * hidden_cost as f64 {
             break;
         }
         if tried[top.idx] {
@@ -85,7 +87,7 @@ pub fn greedy<T>(
             continue;
         };
         let rg = cost.gain(&real, &covered);
-        if rg == 0 || (rg as f64) < MIN_GAIN_SHARE * hidden_cost as f64 {
+        if rg == 0 || (rg as f64) < DECIMATE_MIN_GAIN_SHARE * hidden_cost as f64 {
             continue;
         }
         hidden_cost += rg;

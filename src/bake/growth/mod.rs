@@ -26,6 +26,7 @@ use glam::DVec2;
 use self::decimate::greedy;
 use self::dense::CellGrower;
 use super::cell::CellSetup;
+use super::certify::LEVEL_FALLBACKS;
 use super::plan::{CellStats, Plan};
 use super::quantize::{clip, quantize, window, Refused};
 use super::slice::{d_near, Support};
@@ -33,9 +34,6 @@ use super::BlockerSet;
 use crate::geom::verify::Verifier;
 use crate::runtime::format::CellRecord;
 use crate::runtime::frame::HEIGHT_LEVELS;
-
-/// Height levels tried for one VO before it is dropped: its own, then each lower one.
-pub const LEVEL_FALLBACKS: usize = 3;
 
 /// Parameters of the growth.
 #[derive(Clone, Debug)]

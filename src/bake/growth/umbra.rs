@@ -46,56 +46,29 @@
 //! is an intersection of half-planes through input vertices, hence convex, and every point of it
 //! is hidden: the chords' angular intervals overlap in a chain that covers the cell's angle, and
 //! each chord's blocker lies between `q` and the cell (the argument of the verifier's Lemma 1,
-//! DESIGN.md section 4a with the missing conditions added: the measured unsound points of the
+//! docs/DESIGN.md section 4a with the missing conditions added: the measured unsound points of the
 //! plain intersection lay beside or in front of a blocker, which the separating-line and chord
 //! conditions exclude). A VO is a segment of a line behind the chain, clipped to that region in
 //! floating point, shrunk, snapped inward to the grid, and kept only when both snapped endpoints
 //! pass every condition exactly; by convexity the whole segment then lies in the region.
 //! The exact verifier then checks every VO again, independently ([`super::dense`], or the bake).
 
-use std::collections::{HashMap as StdHashMap, HashSet as StdHashSet};
-use std::hash::{BuildHasherDefault, Hasher};
-
-/// The growth's caches are keyed by blocker ids and coordinate bits, which need no protection
-/// against crafted collisions: a multiply-rotate hash (as in rustc's FxHash) instead of SipHash.
-/// Iteration order never reaches the output (maps are looked up, sets only tested).
-#[derive(Default, Clone, Copy)]
-pub(super) struct FastHasher(u64);
-
-impl Hasher for FastHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for c in bytes.chunks(8) {
-            let mut w = [0u8; 8];
-            w[..c.len()].copy_from_slice(c);
-            self.write_u64(u64::from_le_bytes(w));
-        }
-    }
-    fn write_u32(&mut self, n: u32) {
-        self.write_u64(n as u64);
-    }
-    fn write_u64(&mut self, n: u64) {
-        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn finish(&self) -> u64 {
-        self.0
-    }
-}
-
-type HashMap<K, V> = StdHashMap<K, V, BuildHasherDefault<FastHasher>>;
-pub(super) type HashSet<K> = StdHashSet<K, BuildHasherDefault<FastHasher>>;
+// The growth's caches are keyed by blocker ids and coordinate bits, which need no protection
+// against crafted collisions: rustc-hash's FxHasher (a multiply-rotate hash) instead of SipHash.
+// Iteration order never reaches the output (maps are looked up, sets only tested).
+use rustc_hash::{FxHashMap as HashMap, FxHashSet};
+pub(super) type HashSet<K> = FxHashSet<K>;
 
 use glam::DVec2;
 
 use super::GrowParams;
+use crate::bake::cell::VO_GRID_M;
 use crate::bake::{bounds, BlockerSet};
 use crate::geom::predicates::{
     common_tangents, orient, point_in_convex, segment_meets_convex, set_side, CommonTangents,
     Containment, Orientation, SetSide,
 };
 
-/// VO endpoints lie on this grid, metres (a power of two, so the verifier's bisection points are
-/// exact).
-pub const VO_GRID_M: f64 = 1.0 / 1024.0;
 /// Inward shrink of a clipped VO before snapping, metres.
 pub const VO_SHRINK_M: f64 = 0.005;
 /// Length of the boxes that query the R-tree along an active line, metres.
