@@ -75,7 +75,7 @@ enum Command {
     /// store's scene section (object count, fingerprint, CRS) is checked, and another scene is
     /// refused naming what differs. A 1.0 store records no scene: a note says the check could
     /// not be made.
-    #[command(group(ArgGroup::new("which").required(true).args(["cell", "at"])))]
+    #[command(group(ArgGroup::new("which").required(true).args(["cell", "at", "all_cells"])))]
     Pvs {
         /// Store file.
         store: PathBuf,
@@ -92,6 +92,9 @@ enum Command {
         /// The cell holding this world position X,Y.
         #[arg(long, value_name = "X,Y", value_parser = parse_xy, allow_hyphen_values = true)]
         at: Option<(f64, f64)>,
+        /// Every cell of the store, one line each in cell order (the scene is read once).
+        #[arg(long)]
+        all_cells: bool,
         /// Print {"cell": ID, "objects": N, "pvs": [input feature numbers, ascending]}: the
         /// GeoJSON feature index (CityJSON city object, OBJ group), counted across the files in
         /// order with skipped ones included, as `vocc info` numbers them.
@@ -337,8 +340,15 @@ fn run(cli: Cli) -> Result<i32> {
             check,
             cell,
             at,
+            all_cells,
             json,
-        } => store::pvs(store, scene, &read, &check, cell, at, json),
+        } => {
+            let cells = match all_cells {
+                true => store::Cells::All,
+                false => store::Cells::One(cell, at),
+            };
+            store::pvs(store, scene, &read, &check, cells, json)
+        }
         Command::Boxes {
             scene,
             read,

@@ -531,47 +531,62 @@ pub fn which_cell(store: &Store, cell: Option<CellId>, at: Option<(f64, f64)>) -
     }
 }
 
+/// The cells `vocc pvs` answers for: one (`--cell ID` or `--at X,Y`), or every cell of the
+/// store (`--all-cells`).
+pub enum Cells {
+    One(Option<CellId>, Option<(f64, f64)>),
+    All,
+}
+
 pub fn pvs(
     path: PathBuf,
     scene_files: Vec<PathBuf>,
     read: &ReadArgs,
     check: &SceneCheckArgs,
-    cell: Option<CellId>,
-    at: Option<(f64, f64)>,
+    cells: Cells,
     as_json: bool,
 ) -> Result<()> {
     let bytes = read_store(&path)?;
     let store = parse(&path, &bytes)?;
-    let id = which_cell(&store, cell, at)?;
-    let rec = store.cell(id)?;
+    let ids: Vec<CellId> = match cells {
+        Cells::One(cell, at) => {
+            let id = which_cell(&store, cell, at)?;
+            store.cell(id)?;
+            vec![id]
+        }
+        Cells::All => (0..store.cell_count()).collect(),
+    };
     let s = load_checked(&store, &path, &scene_files, read, check)?;
     let (objects, tree, features) = scene_boxes_and_features(&store, &path, &s)?;
     let mut visible = Vec::new();
-    let t = Instant::now();
-    let st = pvs_with_stats(store.frame(), id, &rec, &tree, &mut visible);
-    let us = t.elapsed().as_secs_f64() * 1e6;
-    // Input feature numbers, so that an object has the same number whatever was skipped.
-    let visible: Vec<u32> = visible
-        .iter()
-        .map(|&i| features.get(i as usize).copied().unwrap_or(i))
-        .collect();
     let mut out = std::io::stdout().lock();
-    if as_json {
-        serde_json::to_writer(
-            &mut out,
-            &json!({"cell": id, "objects": objects, "pvs": visible}),
-        )?;
-        writeln!(out)?;
-    } else {
-        writeln!(
-            out,
-            "cell {id}: {} of {} objects potentially visible ({:.1}%), {}, built in {us:.0} µs ({} nodes tested)",
-            visible.len(),
-            objects,
-            100.0 * visible.len() as f64 / objects.max(1) as f64,
-            plural(st.vos, "VO", "VOs"),
-            st.nodes_tested
-        )?;
+    for id in ids {
+        let rec = store.cell(id)?;
+        let t = Instant::now();
+        let st = pvs_with_stats(store.frame(), id, &rec, &tree, &mut visible);
+        let us = t.elapsed().as_secs_f64() * 1e6;
+        // Input feature numbers, so that an object has the same number whatever was skipped.
+        let numbered: Vec<u32> = visible
+            .iter()
+            .map(|&i| features.get(i as usize).copied().unwrap_or(i))
+            .collect();
+        if as_json {
+            serde_json::to_writer(
+                &mut out,
+                &json!({"cell": id, "objects": objects, "pvs": numbered}),
+            )?;
+            writeln!(out)?;
+        } else {
+            writeln!(
+                out,
+                "cell {id}: {} of {} objects potentially visible ({:.1}%), {}, built in {us:.0} µs ({} nodes tested)",
+                numbered.len(),
+                objects,
+                100.0 * numbered.len() as f64 / objects.max(1) as f64,
+                plural(st.vos, "VO", "VOs"),
+                st.nodes_tested
+            )?;
+        }
     }
     Ok(())
 }
