@@ -1,5 +1,5 @@
 //! The binary of this package, run as a user runs it. Its being here also makes `cargo test` at
-//! the root build `target/<profile>/vocc`, which the root's integration tests (tests/cli.rs and
+//! the root build `target/<profile>/vocc`, which the root's integration tests (tests/cli/ and
 //! others, through `common::vocc_bin`) run: cargo builds a package's binaries for its own
 //! integration tests only.
 //!
