@@ -71,7 +71,10 @@ fresh-clone:
 	tools/fresh-clone.sh
 
 # Regenerates the pictures in docs/img: the paper's Fig. 3 configuration, a Lyon cell, and two
-# Lyon cells before (the growth generator) and after (the long generator), like the paper's Fig. 8.
+# Lyon cells before (the growth generator) and after (the long generator), like the paper's Fig. 8,
+# and a Tokyo cell the same way (its 2 MB SVGs are shot to PNG with Chromium: CHROMIUM=path).
+TOKYO = data/tokyo-central/tokyo_central_utm54n.geojson
+CHROMIUM ?= chromium
 pictures:
 	$(CARGO) test --locked --test all umbra_cases::
 	cp target/tmp/umbra-cases/fig3_staggered.svg docs/img/
@@ -94,6 +97,17 @@ pictures:
 			--at $$at --radius 700 -o docs/img/lyon_before_$$at.svg; \
 		$(CARGO) run --locked --release -- render target/lyon.vocc $(DEMO_SCENE) --height-attr HAUTEUR \
 			--at $$at --radius 700 -o docs/img/lyon_after_$$at.svg; \
+	done
+	$(CARGO) run --locked --release -- bake $(TOKYO) --height-attr height -o target/tokyo.vocc
+	$(CARGO) run --locked --release -- bake $(TOKYO) --height-attr height --generator growth \
+		-o target/tokyo_growth.vocc
+	mkdir -p target/tmp/pictures
+	for st in tokyo_growth tokyo; do \
+		$(CARGO) run --locked --release -- render target/$$st.vocc $(TOKYO) --height-attr height \
+			--cell 480 --radius 1500 -o target/tmp/pictures/$$st.svg && \
+		$(CHROMIUM) --headless --no-sandbox --disable-gpu --hide-scrollbars --window-size=900,980 \
+			--screenshot=$(CURDIR)/docs/img/$${st}_cell_480.png file://$(CURDIR)/target/tmp/pictures/$$st.svg \
+			|| exit 1; \
 	done
 
 # Fuzzing (docs/FUZZING.md): every cargo-fuzz target for FUZZ_SECONDS each (default 600), one after
