@@ -290,6 +290,20 @@ pub fn parse_max_vos(s: &str) -> Result<usize, String> {
     whole(s, 1, MAX_VOS_PER_CELL as u64).map(|v| v as usize)
 }
 
+/// Parses `bake --bytes-per-cell`: a number of bytes of at least 8 (a store's smallest record
+/// with one VO), or `none` for no budget.
+pub fn parse_bytes_per_cell(s: &str) -> Result<f64, String> {
+    if s == "none" {
+        return Ok(f64::INFINITY);
+    }
+    match s.parse::<f64>() {
+        Ok(b) if b.is_finite() && b >= 8.0 => Ok(b),
+        _ => Err(format!(
+            "expected a number of bytes of at least 8, or `none`, got {s:?}"
+        )),
+    }
+}
+
 /// The most buildings `gen-city` writes: 10^7 take about 1.5 GB of memory and a 3 GB file.
 pub const MAX_GEN_BUILDINGS: u64 = 10_000_000;
 

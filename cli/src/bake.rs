@@ -18,8 +18,8 @@ use vocc::bake::params::{BakeParams, Effort, Generator, Slices};
 use vocc::scene;
 
 use crate::args::{
-    parse_cell_size, parse_count, parse_count_u32, parse_effort, parse_eye, parse_generator,
-    parse_max_vos, parse_rect, parse_shard, parse_slices, ReadArgs, ShardSpec,
+    parse_bytes_per_cell, parse_cell_size, parse_count, parse_count_u32, parse_effort, parse_eye,
+    parse_generator, parse_max_vos, parse_rect, parse_shard, parse_slices, ReadArgs, ShardSpec,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::progress::Progress;
@@ -55,6 +55,11 @@ pub struct BakeArgs {
     /// Most VOs per cell (1 to 10).
     #[arg(long, default_value_t = 10, value_parser = parse_max_vos)]
     pub max_vos: usize,
+    /// The store's budget, bytes per cell on average with every byte counted (header, index,
+    /// records), or `none`. Each cell keeps at most the VOs that fit its share: 8 on a large
+    /// grid, 7 with per-cell ground and rise bytes or on a small grid (docs/FORMAT.md, "Sizes")
+    #[arg(long, default_value = "52", value_parser = parse_bytes_per_cell, value_name = "B")]
+    pub bytes_per_cell: f64,
     /// Worker threads (default: all cores). The output does not depend on it; more threads
     /// than cores only share them (a note says so).
     #[arg(long, value_parser = parse_count, value_name = "N")]
@@ -190,6 +195,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         eye: a.eye,
         slices: a.slices,
         max_vos: a.max_vos,
+        bytes_per_cell: a.bytes_per_cell,
         generator: a.generator,
         region,
         ..BakeParams::default().with_effort(a.effort)

@@ -87,6 +87,7 @@ fn options_key(p: &BakeParams) -> String {
         eye,
         slices,
         max_vos,
+        bytes_per_cell,
         region: _,
         walkable: _,
         search_m,
@@ -105,6 +106,7 @@ fn options_key(p: &BakeParams) -> String {
             eye,
             slices,
             max_vos,
+            bytes_per_cell,
             GrowKey(grow, *search_m),
             generator,
             weigh_m,
@@ -404,13 +406,13 @@ mod tests {
 
     /// The options' text the global hash takes, for the default bake, pinned: a change to it
     /// makes every old `.hashes` file refuse reuse (which a bake then says), so it is made on
-    /// purpose (the far field, issue 31, changed it).
+    /// purpose (the far field, issue 31, changed it, then the store's byte budget).
     #[test]
     fn the_options_key_keeps_its_layout() {
         let p = BakeParams::default();
         assert_eq!(
             options_key(&p),
-            "(100.0, (1.5, 2.0), Auto, 10, GrowParams { seeds: 8, search_m: 900.0, max_chain: 24, \
+            "(100.0, (1.5, 2.0), Auto, 10, 52.0, GrowParams { seeds: 8, search_m: 900.0, max_chain: 24, \
              max_bridges: 2, tries: 6, min_vo_m: 1.0, single_object: false, verify: false }, \
              Long, 10000.0, MapParams { edge_eyes: 3, bins: 512, px: 4.0, half: 1024.0 }, \
              ProposeParams { directions: 16, spacing: 32.0, step: 2, max_offset: 900.0, \

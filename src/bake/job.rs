@@ -498,7 +498,7 @@ impl<'s> BakeJob<'s> {
 
 /// A CRS name as the store's scene section holds it: at most 255 bytes, cut at a character
 /// boundary (a name that long is a description read from a file, whose start names it).
-fn crs_field(name: &str) -> &str {
+pub(crate) fn crs_field(name: &str) -> &str {
     let mut end = name.len().min(255);
     while !name.is_char_boundary(end) {
         end -= 1;

@@ -128,7 +128,7 @@ pub(super) fn long_vos_traced(
         start,
         &plan.occludees.costs,
         Spans::new(),
-        plan.params.max_vos,
+        plan.vo_cap(setup.id),
         plan.params.budget,
         |c| match &c.value {
             Vo::Piece(p) if c.stage == Stage::Proposed => {

@@ -42,6 +42,11 @@ pub struct BakeParams {
     pub slices: Slices,
     /// Most VOs stored per cell, a count (1 to [`MAX_VOS_PER_CELL`]). Both generators.
     pub max_vos: usize,
+    /// The store's budget, bytes per cell on average with every byte of the store counted
+    /// ([`BYTES_PER_CELL`]; `f64::INFINITY`: none). Each cell keeps at most the VOs that
+    /// [`super::plan::Plan::vo_cap`] allows it, so that the whole store stays within it. Both
+    /// generators.
+    pub bytes_per_cell: f64,
     /// Bake only the cells meeting this local rectangle `[x0, y0, x1, y1]`, metres (the grid
     /// still covers the whole scene). Cell selection, both generators; not in the global hash.
     pub region: Option<[f64; 4]>,
@@ -112,6 +117,13 @@ impl Default for FarParams {
     }
 }
 
+/// The store's default budget, bytes per cell on average, every byte of the store counted
+/// (header, scene section, index, block table, records): the budget the format was sized for
+/// (docs/FORMAT.md section 10). A cell's VO cap follows from it ([`super::plan::Plan::vo_cap`]):
+/// 8 VOs on a large grid, 7 on one with per-cell ground and rise bytes or a small grid, and
+/// never more than `max_vos`.
+pub const BYTES_PER_CELL: f64 = 52.0;
+
 /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres: far
 /// enough for the far field of a large city (its VOs hide objects kilometres behind them),
 /// and cheap, since a VO's hidden occludees are found whole subtrees at a time
@@ -161,6 +173,7 @@ impl Default for BakeParams {
             eye: (1.5, 2.0),
             slices: Slices::Auto,
             max_vos: MAX_VOS_PER_CELL,
+            bytes_per_cell: BYTES_PER_CELL,
             region: None,
             walkable: None,
             search_m: SEARCH_M,

@@ -55,6 +55,8 @@ pub enum BakeError {
     Eye(f64, f64),
     #[error("--max-vos must be 1..=10, got {0}")]
     MaxVos(usize),
+    #[error("--bytes-per-cell must be a positive number of bytes, got {0}")]
+    BytesPerCell(f64),
     #[error("--slices must be 1..=5, got {0}")]
     Slices(u8),
     #[error("the scene has no objects")]
@@ -163,6 +165,9 @@ impl<'s> Plan<'s> {
         }
         if params.max_vos == 0 || params.max_vos > MAX_VOS_PER_CELL {
             return Err(BakeError::MaxVos(params.max_vos));
+        }
+        if !(params.bytes_per_cell > 0.0) {
+            return Err(BakeError::BytesPerCell(params.bytes_per_cell));
         }
         if let Slices::Fixed(n) = params.slices {
             if n == 0 || n > 5 {
@@ -364,6 +369,37 @@ impl<'s> Plan<'s> {
         bases.sort_by(f64::total_cmp);
         let m = bases[(bases.len() - 1) * GROUND_QUANTILE_PCT / 100];
         ((m - f.ground_z0) / f.ground_step).ceil().clamp(0.0, 255.0) as u8
+    }
+
+    /// The most VOs cell `id` may store within the store's budget
+    /// ([`BakeParams::bytes_per_cell`], `B`), and never more than `max_vos`. The store's bytes
+    /// are its fixed part `F` (header, scene section with the CRS name, and the block table's 4
+    /// bytes per 64 cells) and, per cell, 1 index byte, a ground byte when the frame has
+    /// per-cell ground, a rise byte when the cell has a rise, and 6 bytes per VO
+    /// (docs/FORMAT.md sections 5 and 6). Over `N` cells the store is within `B N` bytes when
+    /// every cell is within `B - F / N`: so a cell's cap is `floor((B - F / N - 1 - ground -
+    /// rise) / 6)`. The cap depends on the grid and the cell alone, not on what other cells
+    /// store, so regions, shards and incremental rebakes give the full bake's records. It is at
+    /// least 1: on a grid so small that its header alone exceeds the budget (a few cells), one
+    /// VO a cell still goes in.
+    pub fn vo_cap(&self, id: CellId) -> usize {
+        use crate::runtime::format::{CELLS_PER_BLOCK, HEADER_LEN, SCENE_FIXED_LEN};
+        let b = self.params.bytes_per_cell;
+        if !b.is_finite() {
+            return self.params.max_vos;
+        }
+        let n = self.frame.grid.cell_count().max(1) as f64;
+        let crs = self
+            .scene
+            .crs()
+            .map_or(0, |c| super::job::crs_field(&c.name).len());
+        let blocks = (n / CELLS_PER_BLOCK as f64).ceil();
+        let fixed = (HEADER_LEN + SCENE_FIXED_LEN + crs) as f64 + 4.0 * blocks;
+        let own = 1.0
+            + f64::from(u8::from(self.frame.per_cell_ground()))
+            + f64::from(u8::from(self.stand(id).rise > 0));
+        let cap = ((b - fixed / n - own) / crate::runtime::format::VO_BYTES as f64).floor();
+        (cap.max(1.0) as usize).min(self.params.max_vos)
     }
 
     /// Where the cell stands: its ground level and, on a terrain, its rise (bake/terrain.rs).

@@ -26,7 +26,7 @@ use super::spans::{Costs, Spans};
 /// index, over the 52 allowed), 0.003 8.4 (51.7 bytes, 91.2% culled on 20 cells), 0.004 7.8
 /// (47.9 bytes, 91.0%); Lyon 50.9 and 47.4 bytes. 0.004 leaves room for a city with more far
 /// field than these two.
-pub const SELECT_MIN_GAIN_SHARE: f64 = 0.004;
+pub const SELECT_MIN_GAIN_SHARE: f64 = 0.002;
 
 /// How far a candidate has come.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]

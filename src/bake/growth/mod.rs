@@ -166,7 +166,7 @@ pub(super) fn growth_vos(plan: &Plan, setup: &CellSetup, stats: &mut CellStats) 
     let mut dropped = 0;
     let mut all_checks = 0;
     let all: Vec<(u32, Support)> = near.iter().copied().zip(support.iter().copied()).collect();
-    let vos = greedy(&hidden, &plan.occludees.costs, plan.params.max_vos, |i| {
+    let vos = greedy(&hidden, &plan.occludees.costs, plan.vo_cap(setup.id), |i| {
         let (k, a, b) = cands[i];
         tried += 1;
         // At the slice's level first; when rule 2 leaves too few blockers for the verifier
