@@ -538,6 +538,59 @@ mod tests {
         }
     }
 
+    /// The regression: the selection's gain threshold alone set the bytes, and a district of
+    /// towers (Tokyo's 1,207 buildings of 40 m and more) stored 9.6 VOs a cell, 58.6 bytes a
+    /// cell over the 52 allowed. Now a budget caps each cell: the whole store, every byte
+    /// counted, stays within it, and the cap binds (without it the same bake is over).
+    #[test]
+    fn a_district_of_towers_stored_more_than_its_bytes_per_cell() {
+        let s = city(300);
+        let bake = |bytes_per_cell: f64| {
+            let p = BakeParams {
+                bytes_per_cell,
+                ..BakeParams::default()
+            };
+            let out = BakeJob::new(&s, p).unwrap().run(&|_| {}).unwrap();
+            let n = out.summary.grid.cells as f64;
+            (out.store.len() as f64 / n, out.summary.vos, out)
+        };
+        let (free, free_vos, _) = bake(f64::INFINITY);
+        let budget = 24.0;
+        assert!(
+            free > budget,
+            "without a budget the store is over it: {free}"
+        );
+        let (capped, vos, out) = bake(budget);
+        assert!(capped <= budget, "{capped} bytes a cell over {budget}");
+        assert!(
+            0 < vos && vos < free_vos,
+            "{vos} VOs, {free_vos} without the budget"
+        );
+        // Each cell within its own cap (Plan::vo_cap), which the store's sum then respects.
+        let plan = Plan::new(
+            &s,
+            BakeParams {
+                bytes_per_cell: budget,
+                ..BakeParams::default()
+            },
+        )
+        .unwrap();
+        let st = Store::parse(&out.store).unwrap();
+        for id in 0..out.summary.grid.cells as CellId {
+            let n = st.cell(id).unwrap().vos().len();
+            assert!(n <= plan.vo_cap(id), "cell {id}: {n} VOs");
+        }
+        // A budget that is no number is refused by name.
+        let bad = BakeParams {
+            bytes_per_cell: f64::NAN,
+            ..BakeParams::default()
+        };
+        assert!(matches!(
+            BakeJob::new(&s, bad).err(),
+            Some(JobError::Plan(BakeError::BytesPerCell(_)))
+        ));
+    }
+
     #[test]
     fn shards_threads_and_reuse_give_the_full_bakes_bytes() {
         let s = city(300);

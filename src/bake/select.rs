@@ -21,11 +21,11 @@ use std::collections::BinaryHeap;
 
 use super::spans::{Costs, Spans};
 
-/// The long generator's selection stops when the best remaining gain is below this share of the cost already hidden. It sets
-/// the bytes per cell: on Tokyo's 961 cells 0.002 stores 9.1 VOs a cell (55.7 bytes with the
-/// index, over the 52 allowed), 0.003 8.4 (51.7 bytes, 91.2% culled on 20 cells), 0.004 7.8
-/// (47.9 bytes, 91.0%); Lyon 50.9 and 47.4 bytes. 0.004 leaves room for a city with more far
-/// field than these two.
+/// The long generator's selection stops when the best remaining gain is below this share of the
+/// cost already hidden. The bytes are held by the store's budget (each cell's cap,
+/// `Plan::vo_cap`, 8 VOs on Tokyo's grid), not by this share: under that cap 0.002 stores 7.7 VOs
+/// a cell on Tokyo (47.5 bytes, 90.9% culled on 20 cells), 0.001 7.9 (48.8 bytes, 90.9%), 0.004
+/// 7.1 (43.9 bytes, 90.6%).
 pub const SELECT_MIN_GAIN_SHARE: f64 = 0.002;
 
 /// How far a candidate has come.
