@@ -383,18 +383,17 @@ impl<'s> Plan<'s> {
     /// least 1: on a grid so small that its header alone exceeds the budget (a few cells), one
     /// VO a cell still goes in.
     pub fn vo_cap(&self, id: CellId) -> usize {
-        use crate::runtime::format::{CELLS_PER_BLOCK, HEADER_LEN, SCENE_FIXED_LEN};
         let b = self.params.bytes_per_cell;
         if !b.is_finite() {
             return self.params.max_vos;
         }
-        let n = self.frame.grid.cell_count().max(1) as f64;
+        let n = self.frame.grid.cell_count().max(1);
         let crs = self
             .scene
             .crs()
             .map_or(0, |c| super::job::crs_field(&c.name).len());
-        let blocks = (n / CELLS_PER_BLOCK as f64).ceil();
-        let fixed = (HEADER_LEN + SCENE_FIXED_LEN + crs) as f64 + 4.0 * blocks;
+        let fixed = crate::runtime::format::store::fixed_len(n, crs) as f64;
+        let n = n as f64;
         let own = 1.0
             + f64::from(u8::from(self.frame.per_cell_ground()))
             + f64::from(u8::from(self.stand(id).rise > 0));

@@ -70,6 +70,13 @@ fn blocks_of(cells: u64) -> u64 {
     cells.div_ceil(CELLS_PER_BLOCK as u64)
 }
 
+/// The bytes of a 2.0 store that no cell's record holds: header, scene section with a CRS name
+/// of `crs_len` bytes, and block table (FORMAT.md sections 5.1, 5.2, 5.4). The index (1 byte a
+/// cell) and the payload come on top.
+pub fn fixed_len(cells: u64, crs_len: usize) -> u64 {
+    (HEADER_LEN + SCENE_FIXED_LEN + crs_len) as u64 + 4 * blocks_of(cells)
+}
+
 impl<'a> Store<'a> {
     /// Checks a whole store file of major 2 or 1 (FORMAT.md section 8.1, in order) in
     /// O(cells + VOs) and borrows it.
@@ -503,8 +510,7 @@ pub fn encode_store_with(
     }
     let ground_byte = frame.per_cell_ground();
     let blocks = blocks_of(n);
-    let index_offset = (HEADER_LEN + SCENE_FIXED_LEN + crs.len()) as u64;
-    let payload_offset = index_offset + n + 4 * blocks;
+    let payload_offset = fixed_len(n, crs.len()) + n;
     let mut table = Vec::with_capacity(blocks as usize);
     let mut payload_len: u64 = 0;
     for (i, rec) in cells.iter().enumerate() {
