@@ -13,14 +13,15 @@ use clap::Args;
 
 use rayon::prelude::*;
 
+use vocc::eval::bound::CeilingParams;
 use vocc::eval::metrics::{
     cell_vs, object_boxes, percentile, sample_cells, summarize, vo_rays_all,
 };
 use vocc::eval::plot::{cell_map, chart, Series};
 use vocc::eval::raycast::Caster;
 use vocc::eval::report::{
-    blocker_share_section, dataset_section, eval_cells, eval_markdown, machine, Dataset,
-    SuiteParams,
+    blocker_share_section, dataset_section, eval_cells, eval_markdown, machine,
+    sliced_ceiling_cells, Dataset, SuiteParams,
 };
 use vocc::eval::truth::TruthParams;
 use vocc::runtime::culler::BoxTree;
@@ -88,6 +89,13 @@ pub struct EvalArgs {
     /// Print JSON (summary and per-cell figures).
     #[arg(long)]
     pub json: bool,
+    /// Also estimate each evaluated cell's ceiling over the whole scene: what 10 ideal VOs in
+    /// 2.5D could cull (long runs hidden in 2D from 16 points of the cell's boundary, on lines out
+    /// to the scene's edge, VO tops up to its tallest blocker; `eval::bound::ceiling_sliced`),
+    /// at the heights the store declares. An estimate, not conservative; it tells how far the
+    /// bake is from what its representation could reach. About a second per cell on a city.
+    #[arg(long)]
+    pub ceiling: bool,
     /// Write a Markdown report and its plots into this folder: eval.md, vos.svg (objects culled
     /// against the number of VOs) and map.svg (PVS/VS per cell). The folder is created (the
     /// folder holding it must exist), and written all or nothing.
@@ -146,9 +154,33 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
     let rays = vo_rays_all(&caster, &store, &ids, 16, 16, a.truth.seed);
     let cells = eval_cells(&s, &store, &tree, &ids, &vs);
     let sum = summarize(&s, &cells);
+    let ceiling = a.ceiling.then(|| {
+        let progress = Progress::new("ceiling", ("cell", "cells"), ids.len() as u64);
+        progress.start(ids.len() as u64);
+        let c: Vec<_> = ids
+            .par_iter()
+            .zip(&vs)
+            .flat_map_iter(|(&id, vs)| {
+                let c = sliced_ceiling_cells(
+                    &s,
+                    &store,
+                    &[id],
+                    std::slice::from_ref(vs),
+                    &CeilingParams::scene(),
+                );
+                progress.inc();
+                c
+            })
+            .collect();
+        progress.finish();
+        summarize(&s, &c)
+    });
     let mut out = std::io::stdout().lock();
     if a.json {
         let mut v = serde_json::json!({"summary": sum, "vo_rays": rays, "cells": cells, "machine": machine()});
+        if let Some(c) = &ceiling {
+            v["ceiling"] = serde_json::json!(c);
+        }
         round_timings(&mut v);
         serde_json::to_writer_pretty(&mut out, &v)?;
         writeln!(out)?;
@@ -180,6 +212,15 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
             "3D check of the stored VOs: {} rays from eye points to VO points, {} reached a VO unblocked",
             rays.rays, rays.reached
         )?;
+        if let Some(c) = &ceiling {
+            writeln!(
+                out,
+                "ceiling over the whole scene (10 ideal VOs in 2.5D, an estimate): {:.1}% of objects culled on average, PVS/VS median {:.2}; the store reaches {:.0}% of the culled share",
+                100.0 * c.occluded_share,
+                c.median_ratio,
+                100.0 * sum.occluded_share / c.occluded_share.max(1e-12)
+            )?;
+        }
     }
     if let Some(dir) = &a.report {
         let cmd = std::env::args().collect::<Vec<_>>().join(" ");

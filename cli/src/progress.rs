@@ -105,12 +105,17 @@ impl Progress {
         let t = self.start.elapsed().as_secs_f64();
         let rate = done as f64 / t.max(1e-9);
         let left = total.saturating_sub(done) as f64 / rate.max(1e-9);
+        // A slow job's rate per minute ("1.2 cells/min", not "0.0 cells/s").
+        let rate = if rate < 0.1 {
+            format!("{:.1} {}/min", 60.0 * rate, self.unit.1)
+        } else {
+            format!("{rate:.1} {}/s", self.unit.1)
+        };
         format!(
-            "{}: {done}/{} ({:.0}%), {rate:.1} {}/s, {} elapsed, about {} left",
+            "{}: {done}/{} ({:.0}%), {rate}, {} elapsed, about {} left",
             self.what,
             self.count(total),
             100.0 * done as f64 / total.max(1) as f64,
-            self.unit.1,
             secs(t),
             secs(left)
         )

@@ -18,6 +18,12 @@
 //!   the blockers that support such a VO on their line (rule 2), objects culled when rule 3's
 //!   heights hold too.
 //!
+//! Both ceilings read lines out to `max_offset_m` (600 m, [`CeilingParams::default`], the
+//! figures of docs/RESULTS.md), or over the whole scene ([`CeilingParams::scene`], `vocc eval
+//! --ceiling`): lines out to the scene's edge, spaced and sampled at the same angle beyond
+//! 600 m as at 600 m (a far VO needs angular, not metric, precision), and VO tops up to the
+//! scene's tallest blocker.
+//!
 //! Why [`hidden_2d`] bounds the VO method: a stored VO certifies only a region that blockers
 //! disjoint from the cell hide in 2D (rule 1), and rule 3 adds heights, which can only cull less.
 //! So an object outside this set can be culled by no VO of this cell. Sampling makes the set
@@ -232,7 +238,7 @@ pub struct CeilingParams {
     pub directions: usize,
     /// Metres between parallel candidate lines; the nearest lies `step_m` clear of the cell.
     pub spacing_m: f64,
-    /// Farthest line from the cell centre, metres.
+    /// Farthest line from the cell centre, metres (infinite: the scene's edge, [`Self::scene`]).
     pub max_offset_m: f64,
     /// Metres between sampled points along a line.
     pub step_m: f64,
@@ -242,6 +248,13 @@ pub struct CeilingParams {
     pub min_len_m: f64,
     /// How many segments are chosen.
     pub vos: usize,
+    /// Beyond this distance from the cell centre the spacing of lines and the step along them
+    /// grow in proportion to the distance (a far VO needs angular, not metric, precision):
+    /// `spacing_m` and `step_m` at `near_m`, twice that at twice the distance. Infinite: fixed.
+    pub near_m: f64,
+    /// Besides [`SLICES_ABOVE_EYE_M`], the taller VO tops of [`TALL_SLICES_ABOVE_EYE_M`] up to
+    /// the scene's tallest blocker ([`ceiling_sliced`]).
+    pub tall: bool,
 }
 
 impl Default for CeilingParams {
@@ -254,6 +267,31 @@ impl Default for CeilingParams {
             cell_points: 16,
             min_len_m: 20.0,
             vos: 10,
+            near_m: f64::INFINITY,
+            tall: false,
+        }
+    }
+}
+
+impl CeilingParams {
+    /// The ceiling over the whole scene: lines out to the scene's edge, sampled at the default
+    /// density within 600 m of the cell centre and at the same angle beyond, and VO tops up to
+    /// the scene's tallest blocker.
+    pub fn scene() -> Self {
+        CeilingParams {
+            max_offset_m: f64::INFINITY,
+            near_m: 600.0,
+            tall: true,
+            ..CeilingParams::default()
+        }
+    }
+
+    /// The spacing of lines, or the step along one, at `dist` metres from the cell centre.
+    fn at_distance(&self, metres: f64, dist: f64) -> f64 {
+        if dist > self.near_m {
+            metres * dist / self.near_m
+        } else {
+            metres
         }
     }
 }
@@ -273,7 +311,8 @@ pub struct Ceiling {
 /// Margin of the umbra test, metres: every side test must pass by this much.
 const UMBRA_MARGIN_M: f64 = 1e-3;
 
-/// Sampled points stay within this far beyond `max_offset_m` of the cell centre (per axis).
+/// Sampled points stay within this far beyond `max_offset_m` of the cell centre (per axis), and,
+/// when lines reach the scene's edge, within this far of the scene's bounds.
 const LINE_REACH_M: f64 = 200.0;
 
 /// What `p.vos` ideal VOs could cull from the cell `r = [x0, y0, x1, y1]` in 2D (module header):
@@ -293,6 +332,10 @@ pub struct Heights {
 
 /// VO tops of [`ceiling_sliced`]'s slices, metres above the highest eye.
 pub const SLICES_ABOVE_EYE_M: [f64; 7] = [1.0, 2.0, 4.0, 6.0, 10.0, 16.0, 24.0];
+
+/// The taller VO tops of [`ceiling_sliced`] with [`CeilingParams::tall`], metres above the
+/// highest eye: those up to the scene's tallest blocker.
+pub const TALL_SLICES_ABOVE_EYE_M: [f64; 6] = [40.0, 64.0, 100.0, 160.0, 250.0, 400.0];
 
 /// What `p.vos` ideal VOs could cull from the cell `r` in 2.5D, sliced: at each VO top `t` of
 /// [`SLICES_ABOVE_EYE_M`] above the eyes, the candidate runs of a line are those hidden by the
@@ -319,69 +362,128 @@ fn ceiling(scene: &Scene, r: [f64; 4], heights: Option<Heights>, p: &CeilingPara
     let eyes = boundary_points(&cell, p.cell_points, 0.0);
     let centre = (cell[0] + cell[2]) * 0.5;
     let half = (cell[2] - cell[0]) * 0.5;
-    let reach = p.max_offset_m + LINE_REACH_M;
+    // Where sampled points may lie: the square of `max_offset_m` (and a margin) around the
+    // centre, cut to the scene's bounds (and a margin) when lines reach its edge.
+    // (Relative to the centre.)
+    let rect = if p.max_offset_m.is_finite() {
+        let reach = p.max_offset_m + LINE_REACH_M;
+        (DVec2::splat(-reach), DVec2::splat(reach))
+    } else {
+        let (slo, shi) = scene_bounds(scene);
+        (
+            slo.min(cell[0]) - centre - DVec2::splat(LINE_REACH_M),
+            shi.max(cell[2]) - centre + DVec2::splat(LINE_REACH_M),
+        )
+    };
     // Every line: its normal and offset from the centre, in direction-then-offset order.
     let lines: Vec<(DVec2, f64)> = (0..p.directions)
         .flat_map(|k| {
             let th = std::f64::consts::TAU * k as f64 / p.directions as f64;
             let n = DVec2::new(th.cos(), th.sin());
             let clear = n.x.abs() * half.x + n.y.abs() * half.y + p.step_m;
-            let count = if p.spacing_m > 0.0 && clear <= p.max_offset_m {
-                ((p.max_offset_m - clear) / p.spacing_m).floor() as usize + 1
-            } else {
-                0
-            };
-            (0..count).map(move |j| (n, clear + j as f64 * p.spacing_m))
+            let mut offsets = Vec::new();
+            if p.max_offset_m.is_finite() && !p.near_m.is_finite() {
+                let count = if p.spacing_m > 0.0 && clear <= p.max_offset_m {
+                    ((p.max_offset_m - clear) / p.spacing_m).floor() as usize + 1
+                } else {
+                    0
+                };
+                offsets.extend((0..count).map(|j| clear + j as f64 * p.spacing_m));
+            } else if p.spacing_m > 0.0 {
+                // Out to the farthest corner of the sampled rectangle along the normal.
+                let far = [
+                    rect.0,
+                    DVec2::new(rect.1.x, rect.0.y),
+                    rect.1,
+                    DVec2::new(rect.0.x, rect.1.y),
+                ]
+                .iter()
+                .map(|&c| n.dot(c))
+                .fold(0.0, f64::max)
+                .min(p.max_offset_m);
+                let mut d = clear;
+                while d <= far {
+                    offsets.push(d);
+                    d += p.at_distance(p.spacing_m, d);
+                }
+            }
+            offsets.into_iter().map(move |d| (n, d))
         })
         .collect();
     // The slices' VO tops (none: heights ignored).
     let tops: Vec<Option<f64>> = match heights {
         None => vec![None],
-        Some(h) => SLICES_ABOVE_EYE_M.iter().map(|d| Some(h.e1 + d)).collect(),
-    };
-    let mut candidates: Vec<([DVec2; 2], Option<f64>)> = Vec::new();
-    for &top in &tops {
-        // Blockers low enough at their base and taller than the eyes; per line, those that
-        // support a VO of this top on it by rule 2 with the line's bound of lambda.
-        let outside = Outside::with(scene, &cell, |b| match heights {
-            Some(h) => b.base <= h.e0 && b.top > h.e1,
-            None => true,
-        });
-        if outside.is_empty() {
-            continue;
+        Some(h) => {
+            let tallest = scene
+                .blockers
+                .iter()
+                .chain(scene.terrain_blockers())
+                .map(|b| b.top)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let tall: &[f64] = if p.tall {
+                &TALL_SLICES_ABOVE_EYE_M
+            } else {
+                &[]
+            };
+            SLICES_ABOVE_EYE_M
+                .iter()
+                .chain(tall.iter().filter(|&&d| h.e1 + d <= tallest))
+                .map(|d| Some(h.e1 + d))
+                .collect()
         }
+    };
+    // Blockers low enough at their base and taller than the eyes; per line and slice, those
+    // that support a VO of the slice's top on it by rule 2 with the line's bound of lambda.
+    let outside = Outside::with(scene, &cell, |b| match heights {
+        Some(h) => b.base <= h.e0 && b.top > h.e1,
+        None => true,
+    });
+    let mut candidates: Vec<([DVec2; 2], Option<f64>)> = Vec::new();
+    if !outside.is_empty() {
         let cs = &cell;
-        candidates.extend(
-            lines
-                .par_iter()
-                .flat_map_iter(|&(n, d)| {
-                    let at = |v: DVec2| d - n.dot(v - centre);
-                    let d_line = cs.iter().map(|&c| at(c)).fold(0.0, f64::max);
-                    let keep = |b: &Blocker| match (top, heights) {
-                        (Some(t), Some(h)) => {
-                            let d_b = b
-                                .polygon
-                                .iter()
-                                .map(|&v| at(v))
-                                .fold(f64::INFINITY, f64::min);
-                            let lambda = if d_b > 0.0 {
-                                1.0 - d_b / d_line + 1e-9
-                            } else {
-                                1.0
-                            };
-                            let lambda = lambda.clamp(0.0, 1.0);
-                            b.top >= h.e1 + lambda * (t - h.e1)
-                                && (b.base <= h.g.min(h.e0)
-                                    || b.base <= h.e0 - lambda * (h.e0 - h.g))
-                        }
-                        _ => true,
-                    };
-                    hidden_runs(&outside, &keep, &eyes, centre, n, d, reach, p)
-                })
-                .collect::<Vec<_>>()
-                .into_iter()
-                .map(|s| (s, top)),
-        );
+        // Per line, the runs of each slice. A taller top keeps a subset of the blockers (rule
+        // 2's bound only grows with the top, in floating point too; the tops ascend), so the
+        // slices that hide a point are the lowest ones up to some top, found by bisection.
+        debug_assert!(tops.windows(2).all(|w| w[0] <= w[1]));
+        let per_line: Vec<Vec<Vec<[DVec2; 2]>>> = lines
+            .par_iter()
+            .map(|&(n, d)| {
+                let at = |v: DVec2| d - n.dot(v - centre);
+                let d_line = cs.iter().map(|&c| at(c)).fold(0.0, f64::max);
+                let keep = |top: Option<f64>, b: &Blocker| match (top, heights) {
+                    (Some(t), Some(h)) => {
+                        let d_b = b
+                            .polygon
+                            .iter()
+                            .map(|&v| at(v))
+                            .fold(f64::INFINITY, f64::min);
+                        let lambda = if d_b > 0.0 {
+                            1.0 - d_b / d_line + 1e-9
+                        } else {
+                            1.0
+                        };
+                        let lambda = lambda.clamp(0.0, 1.0);
+                        b.top >= h.e1 + lambda * (t - h.e1)
+                            && (b.base <= h.g.min(h.e0) || b.base <= h.e0 - lambda * (h.e0 - h.g))
+                    }
+                    _ => true,
+                };
+                let keeps: Vec<Box<dyn Fn(&Blocker) -> bool + '_>> = tops
+                    .iter()
+                    .map(|&top| {
+                        Box::new(move |b: &Blocker| keep(top, b)) as Box<dyn Fn(&Blocker) -> bool>
+                    })
+                    .collect();
+                let line = Line::new(centre, n, d, rect, p);
+                let hiding = line.hiding_slices(&outside, &keeps, &eyes);
+                (0..tops.len()).map(|k| line.runs(&hiding, k, p)).collect()
+            })
+            .collect();
+        for (k, &top) in tops.iter().enumerate() {
+            for runs in &per_line {
+                candidates.extend(runs[k].iter().map(|&s| (s, top)));
+            }
+        }
     }
     // The objects each candidate culls.
     let boxes: Vec<[DVec2; 4]> = scene
@@ -395,10 +497,21 @@ fn ceiling(scene: &Scene, r: [f64; 4], heights: Option<Heights>, p: &CeilingPara
     let culls: Vec<Vec<u32>> = candidates
         .par_iter()
         .map(|&([a, b], top)| {
+            // A box in the umbra lies wholly across the segment's line from the cell: the part
+            // of `crosses` for the first cell corner, read first for every corner (the same
+            // operations as `side`, so the same bits; it only skips boxes that fail anyway).
+            let (ab, l) = (b - a, a.distance(b));
+            let sc = ab.perp_dot(cell[0] - a) / l;
+            let m = UMBRA_MARGIN_M;
+            let across = |w: DVec2| {
+                let sw = ab.perp_dot(w - a) / l;
+                (sc >= m && sw <= -m) || (sc <= -m && sw >= m)
+            };
             (0..boxes.len() as u32)
                 .filter(|&o| {
                     let bx = &boxes[o as usize];
-                    box_in_umbra(&cell, bx, a, b)
+                    bx.iter().all(|&w| across(w))
+                        && box_in_umbra(&cell, bx, a, b)
                         && match (top, heights) {
                             (Some(t), Some(h)) => {
                                 let z = &scene.objects[o as usize].bbox;
@@ -438,70 +551,155 @@ fn ceiling(scene: &Scene, r: [f64; 4], heights: Option<Heights>, p: &CeilingPara
     out
 }
 
-/// The candidate segments on the line `{x : n . (x - centre) = d}`: its points every `step_m`
-/// within `centre ± reach`, the maximal runs of those hidden from every eye, each shortened by
-/// one step at both ends and kept when at least `min_len_m` long; in order along the line.
-#[allow(clippy::too_many_arguments)]
-fn hidden_runs(
-    outside: &Outside,
-    keep: &dyn Fn(&Blocker) -> bool,
-    eyes: &[DVec2],
-    centre: DVec2,
-    n: DVec2,
+/// The sampled points of the line `{x : n . (x - centre) = d}`: every `step_m` (growing beyond
+/// `near_m` from the centre, [`CeilingParams::near_m`]) within the rectangle `centre + rect`
+/// (its corners relative to the centre), as parameters `t` of `foot + t u`.
+struct Line {
+    foot: DVec2,
+    u: DVec2,
     d: f64,
-    reach: f64,
-    p: &CeilingParams,
-) -> Vec<[DVec2; 2]> {
-    let u = n.perp();
-    let foot = centre + n * d;
-    // The parameter range of the line inside the square: |n.i d + u.i t| <= reach per axis.
-    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
-    for (ni, ui) in [(n.x, u.x), (n.y, u.y)] {
-        if ui.abs() > 1e-12 {
-            let (e0, e1) = ((-reach - ni * d) / ui, (reach - ni * d) / ui);
-            t0 = t0.max(e0.min(e1));
-            t1 = t1.min(e0.max(e1));
-        } else if (ni * d).abs() > reach {
-            return Vec::new();
-        }
-    }
-    if !(t1 >= t0) {
-        return Vec::new();
-    }
-    let samples = ((t1 - t0) / p.step_m).floor() as usize + 1;
-    let at = |k: usize| t0 + k as f64 * p.step_m;
-    // Coherence along the line: the eye that last saw a point is tried first, and each eye
-    // tries first the blocker that last blocked it.
-    let mut hints: Vec<Option<u32>> = vec![None; eyes.len()];
-    let mut seer = 0usize;
-    let mut hidden = |t: f64| -> bool {
-        let q = foot + u * t;
-        for j in 0..eyes.len() {
-            let e = (seer + j) % eyes.len();
-            if !outside.blocked_by(eyes[e], q, 0..0, &mut hints[e], keep) {
-                seer = e;
-                return false;
+    ts: Vec<f64>,
+}
+
+impl Line {
+    fn new(centre: DVec2, n: DVec2, d: f64, rect: (DVec2, DVec2), p: &CeilingParams) -> Line {
+        let u = n.perp();
+        let foot = centre + n * d;
+        let mut line = Line {
+            foot,
+            u,
+            d,
+            ts: Vec::new(),
+        };
+        // The parameter range of the line inside the rectangle: lo.i <= n.i d + u.i t <= hi.i
+        // per axis.
+        let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+        for (ni, ui, lo, hi) in [
+            (n.x, u.x, rect.0.x, rect.1.x),
+            (n.y, u.y, rect.0.y, rect.1.y),
+        ] {
+            if ui.abs() > 1e-12 {
+                let (e0, e1) = ((lo - ni * d) / ui, (hi - ni * d) / ui);
+                t0 = t0.max(e0.min(e1));
+                t1 = t1.min(e0.max(e1));
+            } else if ni * d < lo || ni * d > hi {
+                return line;
             }
         }
-        true
-    };
-    let mut runs = Vec::new();
-    let mut start: Option<usize> = None;
-    for k in 0..=samples {
-        let h = k < samples && hidden(at(k));
-        match (h, start) {
-            (true, None) => start = Some(k),
-            (false, Some(k0)) => {
-                let (ta, tb) = (at(k0) + p.step_m, at(k - 1) - p.step_m);
-                if tb - ta >= p.min_len_m {
-                    runs.push([foot + u * ta, foot + u * tb]);
+        if !(t1 >= t0) {
+            return line;
+        }
+        // Every `step_m` from `t0` (fixed steps: `t0 + k step_m`, as written before the steps
+        // could grow), or steps growing with the distance from the centre.
+        if p.near_m.is_finite() {
+            let mut t = t0;
+            while t <= t1 {
+                line.ts.push(t);
+                t += line.step(t, p);
+            }
+        } else {
+            let samples = ((t1 - t0) / p.step_m).floor() as usize + 1;
+            line.ts = (0..samples).map(|k| t0 + k as f64 * p.step_m).collect();
+        }
+        line
+    }
+
+    /// The step along the line at parameter `t`.
+    fn step(&self, t: f64, p: &CeilingParams) -> f64 {
+        p.at_distance(p.step_m, self.d.hypot(t))
+    }
+
+    /// For each sampled point, how many of the slices hide it from every eye: slice `s` by the
+    /// blockers `keeps[s]` accepts, each slice's blockers a subset of the one before, so the
+    /// slices hiding a point are the first ones, and their count is found by bisection.
+    fn hiding_slices(
+        &self,
+        outside: &Outside,
+        keeps: &[Box<dyn Fn(&Blocker) -> bool + '_>],
+        eyes: &[DVec2],
+    ) -> Vec<usize> {
+        // Coherence along the line: per slice, the eye that last saw a point is tried first,
+        // and each eye tries first the blocker that last blocked it (answers do not depend on
+        // either).
+        let mut hints: Vec<Vec<Option<u32>>> = vec![vec![None; eyes.len()]; keeps.len()];
+        let mut seer = vec![0usize; keeps.len()];
+        let mut hidden = |q: DVec2, s: usize| -> bool {
+            for j in 0..eyes.len() {
+                let e = (seer[s] + j) % eyes.len();
+                if !outside.blocked_by(eyes[e], q, 0..0, &mut hints[s][e], &*keeps[s]) {
+                    seer[s] = e;
+                    return false;
                 }
-                start = None;
             }
-            _ => {}
-        }
+            true
+        };
+        self.ts
+            .iter()
+            .map(|&t| {
+                let q = self.foot + self.u * t;
+                // Slices below `lo` hide it, those from `hi` on do not.
+                let (mut lo, mut hi) = (0, keeps.len());
+                while lo < hi {
+                    let mid = lo + (hi - lo) / 2;
+                    if hidden(q, mid) {
+                        lo = mid + 1;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                lo
+            })
+            .collect()
     }
-    runs
+
+    /// The candidate segments of slice `s`: the maximal runs of sampled points it hides
+    /// (`hiding[k] > s`), each shortened by one step at both ends and kept when at least
+    /// `min_len_m` long; in order along the line.
+    fn runs(&self, hiding: &[usize], s: usize, p: &CeilingParams) -> Vec<[DVec2; 2]> {
+        let (foot, u, ts) = (self.foot, self.u, &self.ts);
+        let mut runs = Vec::new();
+        let mut start: Option<usize> = None;
+        for k in 0..=ts.len() {
+            let h = k < ts.len() && hiding[k] > s;
+            match (h, start) {
+                (true, None) => start = Some(k),
+                (false, Some(k0)) => {
+                    let (ta, tb) = (
+                        ts[k0] + self.step(ts[k0], p),
+                        ts[k - 1] - self.step(ts[k - 1], p),
+                    );
+                    if tb - ta >= p.min_len_m {
+                        runs.push([foot + u * ta, foot + u * tb]);
+                    }
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        runs
+    }
+}
+
+/// The bounds of the scene's blockers (its terrain's included) and objects, `(min, max)`.
+fn scene_bounds(scene: &Scene) -> (DVec2, DVec2) {
+    let inf = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    let (lo, hi) = scene
+        .blockers
+        .iter()
+        .chain(scene.terrain_blockers())
+        .flat_map(|b| b.polygon.iter().copied())
+        .chain(
+            scene
+                .objects
+                .iter()
+                .flat_map(|o| [o.bbox.min.truncate(), o.bbox.max.truncate()]),
+        )
+        .fold(inf, |(l, h), v| (l.min(v), h.max(v)));
+    if lo.x > hi.x {
+        (DVec2::ZERO, DVec2::ZERO)
+    } else {
+        (lo, hi)
+    }
 }
 
 /// Signed distance of `x` from the line through `p` and `q` (`p != q`), positive to the left.

@@ -89,6 +89,37 @@ pub fn bake_ms(cells: &[CellBake]) -> (f64, f64) {
 }
 
 /// Evaluates `ids` of a store given their visible sets.
+/// The 2.5D ceiling of each cell `ids[k]` ([`ceiling_sliced`] with `params`), at the heights
+/// `store` declares for it, compared with its visible set `vs[k]`: what ideal VOs could cull,
+/// as the bake's cells are evaluated (an estimate, never a PVS to use).
+pub fn sliced_ceiling_cells(
+    s: &Scene,
+    store: &Store,
+    ids: &[CellId],
+    vs: &[Vec<u32>],
+    params: &CeilingParams,
+) -> Vec<CellEval> {
+    ids.iter()
+        .zip(vs)
+        .map(|(&id, vs)| {
+            let f = store.frame();
+            let r = f.grid.cell_rect(id).expect("in grid");
+            let ground = store.cell(id).map_or(Default::default(), |c| c.stand());
+            let view = f.cell_view(id, ground).expect("in grid");
+            let h = Heights {
+                g: f.ground_z(ground.level),
+                e0: view.e0,
+                e1: view.e1,
+            };
+            let c = ceiling_sliced(s, r, h, params);
+            let pvs: Vec<u32> = (0..s.objects.len() as u32)
+                .filter(|i| c.culled.binary_search(i).is_err())
+                .collect();
+            compare(s, id, c.vos.len(), vs, &pvs)
+        })
+        .collect()
+}
+
 pub fn eval_cells(
     scene: &Scene,
     store: &Store,
@@ -500,26 +531,7 @@ pub fn dataset_section(
     // The same in 2.5D, sliced (eval::bound::ceiling_sliced), at the heights the default store
     // declares for each cell.
     progress(&format!("{}: ceiling of 10 ideal VOs in 2.5D", d.name));
-    let sliced: Vec<CellEval> = sample
-        .iter()
-        .zip(&vs_sample)
-        .map(|(&id, vs)| {
-            let f = store.frame();
-            let r = f.grid.cell_rect(id).expect("in grid");
-            let ground = store.cell(id).map_or(Default::default(), |c| c.stand());
-            let view = f.cell_view(id, ground).expect("in grid");
-            let h = Heights {
-                g: f.ground_z(ground.level),
-                e0: view.e0,
-                e1: view.e1,
-            };
-            let c = ceiling_sliced(&s, r, h, &cp);
-            let pvs: Vec<u32> = (0..s.objects.len() as u32)
-                .filter(|i| c.culled.binary_search(i).is_err())
-                .collect();
-            compare(&s, id, c.vos.len(), vs, &pvs)
-        })
-        .collect();
+    let sliced = sliced_ceiling_cells(&s, &store, &sample, &vs_sample, &cp);
     let ssliced = summarize(&s, &sliced);
     row(
         &mut md,

@@ -9,6 +9,7 @@ use common::{repo, LYON};
 mod basics;
 mod friction;
 mod issue13;
+mod issue31;
 mod issue33;
 mod issue33_smaller;
 

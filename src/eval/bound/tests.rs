@@ -263,3 +263,60 @@ fn ceiling_on_lyon_cells() {
         mean(&ms)
     );
 }
+
+#[test]
+fn the_scene_ceiling_reaches_a_row_1500_m_out_that_the_600_m_one_never_sees() {
+    // A row of ten 20 m buildings at y 1500..1520, x -200..300, and behind it two boxes at
+    // y 1700 (objects 10 and 11); the cell is [0, 100]^2. The 600 m ceiling samples points
+    // within 800 m of the centre: no candidate, nothing culled. Over the whole scene, lines
+    // beyond 600 m are spaced and sampled at the same angle (about 60 m apart, every 10 m
+    // along them, near the row), and a run just behind the row hides both boxes.
+    let mut b: Vec<[f64; 4]> = (0..10)
+        .map(|i| {
+            let x = -200.0 + 50.0 * i as f64;
+            [x, 1500.0, x + 50.0, 1520.0]
+        })
+        .collect();
+    b.push([40.0, 1700.0, 60.0, 1715.0]);
+    b.push([0.0, 1800.0, 30.0, 1820.0]);
+    let s = boxes_scene(&b);
+    let r = cell(&s);
+    assert!(ceiling_2d(&s, r, &CeilingParams::default())
+        .culled
+        .is_empty());
+    let c = ceiling_2d(&s, r, &CeilingParams::scene());
+    assert_eq!(c.culled, vec![10, 11], "{c:?}");
+    // The culled boxes are hidden in 2D (the ceiling stays within the fusion bound).
+    let hidden = hidden_2d(&s, r, &BoundParams::default());
+    assert!(c.culled.iter().all(|o| hidden.binary_search(o).is_ok()));
+}
+
+#[test]
+fn the_scene_ceiling_lets_a_tall_row_hide_a_tower() {
+    // A row 100 m tall at y 130..150 in front of the cell [0, 100]^2 and a 150 m tower at
+    // y 400..420 (object 26). At the default tops (at most 24 m above the eyes) a VO just
+    // behind the row allows at most about 2 + 24 F = 64.6 m at the tower (F = 2.6, the
+    // sliced test above); the whole-scene ceiling adds tops up to the tallest blocker (150 m),
+    // and one of 64 m above the eyes allows about 168 m there.
+    let mut b: Vec<([f64; 4], f64)> = (0..26)
+        .map(|i| {
+            let x = -600.0 + 50.0 * i as f64;
+            ([x, 130.0, x + 50.0, 150.0], 100.0)
+        })
+        .collect();
+    b.push(([0.0, 400.0, 30.0, 420.0], 150.0));
+    let s = boxes_scene_of(&b);
+    let r = cell(&s);
+    let h = Heights {
+        g: 0.0,
+        e0: 1.5,
+        e1: 2.0,
+    };
+    assert!(ceiling_sliced(&s, r, h, &CeilingParams::default())
+        .culled
+        .is_empty());
+    assert_eq!(
+        ceiling_sliced(&s, r, h, &CeilingParams::scene()).culled,
+        vec![26]
+    );
+}
