@@ -468,14 +468,9 @@ fn ceiling(scene: &Scene, r: [f64; 4], heights: Option<Heights>, p: &CeilingPara
                     }
                     _ => true,
                 };
-                let keeps: Vec<Box<dyn Fn(&Blocker) -> bool + '_>> = tops
-                    .iter()
-                    .map(|&top| {
-                        Box::new(move |b: &Blocker| keep(top, b)) as Box<dyn Fn(&Blocker) -> bool>
-                    })
-                    .collect();
+                let keep_in = |k: usize, b: &Blocker| keep(tops[k], b);
                 let line = Line::new(centre, n, d, rect, p);
-                let hiding = line.hiding_slices(&outside, &keeps, &eyes);
+                let hiding = line.hiding_slices(&outside, tops.len(), &keep_in, &eyes);
                 (0..tops.len()).map(|k| line.runs(&hiding, k, p)).collect()
             })
             .collect();
@@ -609,24 +604,26 @@ impl Line {
         p.at_distance(p.step_m, self.d.hypot(t))
     }
 
-    /// For each sampled point, how many of the slices hide it from every eye: slice `s` by the
-    /// blockers `keeps[s]` accepts, each slice's blockers a subset of the one before, so the
-    /// slices hiding a point are the first ones, and their count is found by bisection.
+    /// For each sampled point, how many of the `slices` hide it from every eye: slice `s` by
+    /// the blockers `keep(s, _)` accepts, each slice's blockers a subset of the one before, so
+    /// the slices hiding a point are the first ones, and their count is found by bisection.
     fn hiding_slices(
         &self,
         outside: &Outside,
-        keeps: &[Box<dyn Fn(&Blocker) -> bool + '_>],
+        slices: usize,
+        keep: &dyn Fn(usize, &Blocker) -> bool,
         eyes: &[DVec2],
     ) -> Vec<usize> {
         // Coherence along the line: per slice, the eye that last saw a point is tried first,
         // and each eye tries first the blocker that last blocked it (answers do not depend on
         // either).
-        let mut hints: Vec<Vec<Option<u32>>> = vec![vec![None; eyes.len()]; keeps.len()];
-        let mut seer = vec![0usize; keeps.len()];
+        let mut hints: Vec<Vec<Option<u32>>> = vec![vec![None; eyes.len()]; slices];
+        let mut seer = vec![0usize; slices];
         let mut hidden = |q: DVec2, s: usize| -> bool {
+            let keep_s = |b: &Blocker| keep(s, b);
             for j in 0..eyes.len() {
                 let e = (seer[s] + j) % eyes.len();
-                if !outside.blocked_by(eyes[e], q, 0..0, &mut hints[s][e], &*keeps[s]) {
+                if !outside.blocked_by(eyes[e], q, 0..0, &mut hints[s][e], &keep_s) {
                     seer[s] = e;
                     return false;
                 }
@@ -638,7 +635,7 @@ impl Line {
             .map(|&t| {
                 let q = self.foot + self.u * t;
                 // Slices below `lo` hide it, those from `hi` on do not.
-                let (mut lo, mut hi) = (0, keeps.len());
+                let (mut lo, mut hi) = (0, slices);
                 while lo < hi {
                     let mid = lo + (hi - lo) / 2;
                     if hidden(q, mid) {
