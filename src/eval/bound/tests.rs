@@ -44,16 +44,28 @@ fn cell(s: &Scene) -> [f64; 4] {
     [-x, -y, 100.0 - x, 100.0 - y]
 }
 
+/// 26 touching buildings of `height` in a row from x = -600 to 700 at y = 130..150.
+fn row_of(height: f64) -> Vec<([f64; 4], f64)> {
+    (0..26)
+        .map(|i| {
+            let x = -600.0 + 50.0 * i as f64;
+            ([x, 130.0, x + 50.0, 150.0], height)
+        })
+        .collect()
+}
+
+/// Eyes 1.5..2 m above a ground at 0.
+const GROUND_EYES: Heights = Heights {
+    g: 0.0,
+    e0: 1.5,
+    e1: 2.0,
+};
+
 /// 26 touching buildings in a row from x = -600 to 700 at y = 130..150 (objects 0..26), two
 /// objects the cell sees (26 in front of the row, 27 beside the cell), four behind the row
 /// (28..32).
 fn row_scene() -> Scene {
-    let mut b: Vec<[f64; 4]> = (0..26)
-        .map(|i| {
-            let x = -600.0 + 50.0 * i as f64;
-            [x, 130.0, x + 50.0, 150.0]
-        })
-        .collect();
+    let mut b: Vec<[f64; 4]> = row_of(20.0).into_iter().map(|(r, _)| r).collect();
     b.push([40.0, 110.0, 60.0, 120.0]);
     b.push([150.0, 40.0, 170.0, 60.0]);
     b.push([-100.0, 200.0, -80.0, 215.0]);
@@ -110,12 +122,7 @@ fn the_sliced_ceiling_culls_only_what_rule_3_lets_a_vo_as_tall_as_the_row_hide()
     // (lambda near 1) and allows tops of about 2 + 8 F, F = 1.3 at y 200 and 2.6 at y 400:
     // 12.4 m and 22.8 m. Farther back, rule 2's perspective lets the row hold taller VOs,
     // whose F falls as fast: no VO covers a 30 m box.
-    let mut b: Vec<([f64; 4], f64)> = (0..26)
-        .map(|i| {
-            let x = -600.0 + 50.0 * i as f64;
-            ([x, 130.0, x + 50.0, 150.0], 10.0)
-        })
-        .collect();
+    let mut b = row_of(10.0);
     b.push(([40.0, 200.0, 60.0, 215.0], 8.0));
     b.push(([-20.0, 200.0, 0.0, 215.0], 30.0));
     b.push(([0.0, 400.0, 30.0, 420.0], 15.0));
@@ -124,11 +131,7 @@ fn the_sliced_ceiling_culls_only_what_rule_3_lets_a_vo_as_tall_as_the_row_hide()
     let r = cell(&s);
     let p = CeilingParams::default();
     assert_eq!(ceiling_2d(&s, r, &p).culled, vec![26, 27, 28, 29]);
-    let h = Heights {
-        g: 0.0,
-        e0: 1.5,
-        e1: 2.0,
-    };
+    let h = GROUND_EYES;
     let c = ceiling_sliced(&s, r, h, &p);
     assert_eq!(c.culled, vec![26, 28], "{c:?}");
     // Eyes 6 m higher: near the row a VO is at most 2 m above them, and 8 + 2 F at y 400
@@ -298,20 +301,11 @@ fn the_scene_ceiling_lets_a_tall_row_hide_a_tower() {
     // behind the row allows at most about 2 + 24 F = 64.6 m at the tower (F = 2.6, the
     // sliced test above); the whole-scene ceiling adds tops up to the tallest blocker (150 m),
     // and one of 64 m above the eyes allows about 168 m there.
-    let mut b: Vec<([f64; 4], f64)> = (0..26)
-        .map(|i| {
-            let x = -600.0 + 50.0 * i as f64;
-            ([x, 130.0, x + 50.0, 150.0], 100.0)
-        })
-        .collect();
+    let mut b = row_of(100.0);
     b.push(([0.0, 400.0, 30.0, 420.0], 150.0));
     let s = boxes_scene_of(&b);
     let r = cell(&s);
-    let h = Heights {
-        g: 0.0,
-        e0: 1.5,
-        e1: 2.0,
-    };
+    let h = GROUND_EYES;
     assert!(ceiling_sliced(&s, r, h, &CeilingParams::default())
         .culled
         .is_empty());
