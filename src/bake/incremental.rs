@@ -7,19 +7,27 @@
 //! a store, [`CellHashes::encode`]); and, against an older bake's hashes, the cells to rebake
 //! ([`CellHashes::changed`]).
 //! Invariant (what makes reuse exact): the bake of cell `c` reads the frame, the options, and
-//! only objects (their boxes, costs and blockers) whose bounding box meets the square
-//! `centre(c) ± Plan::reach()`, in index order:
-//! - the inside test and both generators' blockers are R-tree queries within `cell ± search_m`
-//!   (`cell::usable`; rays in the growth are filtered to those), the ground level within
-//!   `cell ± 50 m`, or a wider square up to `cell ± search_m` when that one holds no blocker,
-//!   every blocker lying inside its object's box;
-//! - the occludee weights come from boxes meeting the umbra box, clamped to
-//!   `centre ± reach` (`occludees::Occludees::hidden`);
+//! only objects (their boxes, costs and blockers) in three squares ([`Plan::reaches`]):
+//! - `centre(c) ± near`, in index order: the inside test and both generators' blockers are
+//!   R-tree queries within `cell ± search_m` (`cell::usable`; rays in the growth are filtered to
+//!   those), the ground level within `cell ± 50 m`, or a wider square up to `cell ± search_m`
+//!   when that one holds no blocker, every blocker lying inside its object's box;
+//! - `centre(c) ± weigh`, as a set: the occludee weights come from boxes meeting the umbra box,
+//!   clamped to the weighing square of the cell or of its block (`occludees::Occludees::hidden`),
+//!   and are sums of costs over sets of occludees, so the objects' order does not enter;
+//! - `centre(block(c)) ± block`, in index order: what the far field's block reads
+//!   (`far::block_pieces`: its blockers, its cells' grounds);
 //! - ids enter only through comparisons and sorting, so only their relative order matters, and
 //!   an edit elsewhere in the file does not change a cell's hash.
 //!
-//! The cell hash covers those objects in index order; so two bakes with equal global hashes and
-//! an equal cell hash give that cell the same record, and `tests/incremental.rs` checks that an
+//! Cost: the ordered squares are listed per cell (near, about 1 km) and per block (the block's
+//! reach, once for its cells); the weighing square, 20 km across by default, is hashed as a
+//! set from per-bucket sums (2D prefix sums over buckets of whole cells), in constant time per
+//! cell, so hashing a city of 10^6 buildings takes seconds, not the hours that listing 10 km
+//! around every cell took.
+//!
+//! The cell hash covers those objects, the near and the block's in index order; so two bakes
+//! with equal global hashes and an equal cell hash give that cell the same record, and `tests/incremental.rs` checks that an
 //! incremental rebake is byte-identical to a full bake. The hash is a 64-bit mix (splitmix64
 //! finalizer per word), stable across platforms and runs; it guards against accidental change,
 //! not against an adversary.
@@ -148,6 +156,94 @@ impl std::fmt::Debug for GrowKey<'_> {
     }
 }
 
+/// The objects' hashes summed per bucket (a square of whole cells, at least [`BUCKET_M`] on a
+/// side) and as 2D prefix sums, so the multiset of objects meeting any square of buckets hashes
+/// in constant time: each object adds, wrapping, a mix of its hash and the bucket's index to every
+/// bucket its box meets. A square around a cell takes every bucket it meets, so it covers every
+/// object whose box meets the square (and a little more). No ids: the weights that read these
+/// objects are sums of costs over sets.
+struct BucketSums {
+    min: [f64; 2],
+    side: f64,
+    n: [usize; 2],
+    /// `(n[0] + 1) * (n[1] + 1)` prefix sums, row-major.
+    prefix: Vec<u64>,
+}
+
+/// The smallest bucket side, metres: coarse enough that a large object meets few buckets, fine
+/// enough that a square of 10 km takes at most this much more around it.
+const BUCKET_M: f64 = 100.0;
+
+impl BucketSums {
+    fn new(plan: &Plan, object: &[Mix]) -> BucketSums {
+        let g = &plan.frame.grid;
+        let k = (BUCKET_M / g.cell_size).ceil().max(1.0);
+        let side = k * g.cell_size;
+        let n = [
+            (g.nx as usize).div_ceil(k as usize).max(1),
+            (g.ny as usize).div_ceil(k as usize).max(1),
+        ];
+        let mut b = BucketSums {
+            min: [g.min_x, g.min_y],
+            side,
+            n,
+            prefix: vec![0; (n[0] + 1) * (n[1] + 1)],
+        };
+        let w = n[0] + 1;
+        for (o, h) in plan.scene().objects.iter().zip(object) {
+            let (i0, i1) = b.range(0, o.bbox.min.x, o.bbox.max.x);
+            let (j0, j1) = b.range(1, o.bbox.min.y, o.bbox.max.y);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let mut m = Mix::new(6);
+                    m.word((j * n[0] + i) as u64);
+                    m.word(h.0);
+                    let at = &mut b.prefix[(j + 1) * w + i + 1];
+                    *at = at.wrapping_add(m.0);
+                }
+            }
+        }
+        for j in 1..=n[1] {
+            for i in 1..=n[0] {
+                let v = b.prefix[j * w + i]
+                    .wrapping_add(b.prefix[(j - 1) * w + i])
+                    .wrapping_add(b.prefix[j * w + i - 1])
+                    .wrapping_sub(b.prefix[(j - 1) * w + i - 1]);
+                b.prefix[j * w + i] = v;
+            }
+        }
+        b
+    }
+
+    /// The buckets along `axis` that `[lo, hi]` meets, clamped to the grid (rounding is
+    /// monotone, so two intervals that meet share a bucket).
+    fn range(&self, axis: usize, lo: f64, hi: f64) -> (usize, usize) {
+        let at = |v: f64| {
+            let f = ((v - self.min[axis]) / self.side).floor();
+            if f >= (self.n[axis] - 1) as f64 {
+                self.n[axis] - 1
+            } else if f >= 0.0 {
+                f as usize
+            } else {
+                0
+            }
+        };
+        (at(lo), at(hi))
+    }
+
+    /// The hash of the objects meeting the buckets that `centre ± half` meets.
+    fn sum(&self, (cx, cy): (f64, f64), half: f64) -> u64 {
+        let (i0, i1) = self.range(0, cx - half, cx + half);
+        let (j0, j1) = self.range(1, cy - half, cy + half);
+        let w = self.n[0] + 1;
+        let p = &self.prefix;
+        p[(j1 + 1) * w + i1 + 1]
+            .wrapping_sub(p[j0 * w + i1 + 1])
+            .wrapping_sub(p[(j1 + 1) * w + i0])
+            .wrapping_add(p[j0 * w + i0])
+    }
+}
+
 /// A running 64-bit hash: each word is mixed in with the splitmix64 finalizer.
 #[derive(Clone, Copy)]
 struct Mix(u64);
@@ -247,26 +343,60 @@ impl CellHashes {
                 })
                 .collect(),
         );
-        // One metre more than the bake's own reach, against rounding in its box arithmetic.
-        let reach = plan.reach() + 1.0;
+        // The objects meeting `centre ± half`, ascending ids, each one's hash in that order.
+        let ordered = |tag: u64, (cx, cy): (f64, f64), half: f64| {
+            let mut ids: Vec<u32> = tree
+                .locate_in_envelope_intersecting(AABB::from_corners(
+                    [cx - half, cy - half],
+                    [cx + half, cy + half],
+                ))
+                .map(|o| o.data)
+                .collect();
+            ids.sort_unstable();
+            let mut h = Mix::new(tag);
+            h.word(ids.len() as u64);
+            for i in ids {
+                h.word(object[i as usize].0);
+            }
+            h.finish()
+        };
+        let grid = &plan.frame.grid;
+        let reaches = plan.reaches();
+        // The far field's blocks: one ordered hash per block that a baked cell belongs to.
+        let blocks = plan.blocks;
+        let mut wanted = vec![false; if blocks.side > 0 { blocks.count() } else { 0 }];
+        if blocks.side > 0 {
+            for &id in cells {
+                wanted[blocks.of(id % grid.nx, id / grid.nx)] = true;
+            }
+        }
+        let block_hash: Vec<u64> = (0..wanted.len())
+            .into_par_iter()
+            .map(|b| {
+                if !wanted[b] {
+                    return 0;
+                }
+                let side = blocks.side as f64 * grid.cell_size;
+                let (bi, bj) = (b % blocks.nx as usize, b / blocks.nx as usize);
+                let centre = (
+                    grid.min_x + (bi as f64 + 0.5) * side,
+                    grid.min_y + (bj as f64 + 0.5) * side,
+                );
+                ordered(4, centre, reaches.block)
+            })
+            .collect();
+        let weights = BucketSums::new(plan, &object);
         let per_cell: Vec<(CellId, u64)> = cells
             .par_iter()
             .map(|&id| {
-                let [x0, y0, x1, y1] = plan.frame.grid.cell_rect(id).unwrap_or([0.0; 4]);
-                let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-                let mut ids: Vec<u32> = tree
-                    .locate_in_envelope_intersecting(AABB::from_corners(
-                        [cx - reach, cy - reach],
-                        [cx + reach, cy + reach],
-                    ))
-                    .map(|o| o.data)
-                    .collect();
-                ids.sort_unstable();
+                let [x0, y0, x1, y1] = grid.cell_rect(id).unwrap_or([0.0; 4]);
+                let centre = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
                 let mut h = Mix::new(3);
                 h.word(g.0);
-                h.word(ids.len() as u64);
-                for i in ids {
-                    h.word(object[i as usize].0);
+                h.word(ordered(5, centre, reaches.near));
+                h.word(weights.sum(centre, reaches.weigh));
+                if blocks.side > 0 {
+                    h.word(block_hash[blocks.of(id % grid.nx, id / grid.nx)]);
                 }
                 (id, h.finish())
             })
@@ -419,6 +549,93 @@ mod tests {
              min_len: 60.0, per_direction: 1 }, 25, FarParams { block_m: 400.0, \
              reach_m: 3000.0, px: 12.0, spacing_m: 64.0, min_len_m: 120.0, budget: 12, \
              keep: 12 })"
+        );
+    }
+
+    /// The hash of the first cell (x in [0, 100)) of a row of 20 m squares every 100 m along
+    /// x = 0..4000 (10 m tall, one 30 m tower at x = 2000), listed in the order `xs` gives with
+    /// heights changed by `raise`, baked with `far` on or off, search 300 m, weights 1.5 km.
+    fn first_cell_hash(xs: &[f64], raise: Option<f64>, far: bool) -> u64 {
+        let items: Vec<([f64; 3], f64, f64)> = xs
+            .iter()
+            .map(|&x| {
+                let h = if x == 2000.0 {
+                    30.0
+                } else if Some(x) == raise {
+                    12.0
+                } else {
+                    10.0
+                };
+                ([x, 0.0, 20.0], 0.0, h)
+            })
+            .collect();
+        let scene = crate::testutil::squares(&items);
+        let mut p = BakeParams {
+            search_m: 300.0,
+            weigh_m: 1500.0,
+            ..BakeParams::default()
+        };
+        if !far {
+            p.far.block_m = 0.0;
+        }
+        let plan = Plan::new(&scene, p).unwrap();
+        let cell = plan
+            .frame
+            .grid
+            .cell_at(50.0 - scene.origin.x, 10.0 - scene.origin.y)
+            .unwrap();
+        CellHashes::new(&plan, &[cell]).cells[cell as usize]
+    }
+
+    /// Regression (the 10^6 city's bake spent its first minutes, and would have spent hours,
+    /// hashing: every cell listed and sorted the ids of every object within 10 km). The hash
+    /// now reads three parts of what the bake reads (`Plan::reaches`): the near objects in
+    /// order, the weighed ones as a set by buckets, the block's in order once per block. Each
+    /// part must see what it covers, and the set part must not see order.
+    #[test]
+    fn cell_hashes_see_near_order_far_content_and_nothing_beyond() {
+        let row: Vec<f64> = (0..=40).map(|i| 100.0 * i as f64).collect();
+        let swapped = |a: usize, b: usize| {
+            let mut v = row.clone();
+            v.swap(a, b);
+            v
+        };
+        for far in [false, true] {
+            let base = first_cell_hash(&row, None, far);
+            assert_ne!(base, 0);
+            assert_eq!(base, first_cell_hash(&row, None, far), "deterministic");
+            // Near (within 300 m of the cell): order counts.
+            assert_ne!(
+                base,
+                first_cell_hash(&swapped(1, 2), None, far),
+                "near order"
+            );
+            assert_ne!(
+                base,
+                first_cell_hash(&row, Some(300.0), far),
+                "near content"
+            );
+            // Weighed (1 km away): content counts.
+            assert_ne!(
+                base,
+                first_cell_hash(&row, Some(1000.0), far),
+                "weighed content"
+            );
+            // Beyond every reach (3.5 km; the far field's block reads 3.4 km past its 400 m).
+            assert_eq!(base, first_cell_hash(&row, Some(3900.0), far), "beyond");
+        }
+        // Weighed but outside the near search and, the far field off, outside any block: their
+        // order is not read.
+        assert_eq!(
+            first_cell_hash(&row, None, false),
+            first_cell_hash(&swapped(10, 12), None, false),
+            "order of weighed objects"
+        );
+        // The far field on, the block reads them in order.
+        assert_ne!(
+            first_cell_hash(&row, None, true),
+            first_cell_hash(&swapped(10, 12), None, true),
+            "order within the block's reach"
         );
     }
 

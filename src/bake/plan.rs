@@ -293,21 +293,43 @@ impl<'s> Plan<'s> {
         &self.params
     }
 
-    /// How far from a cell's centre its bake reads the scene (metres, per axis): the search
-    /// distance of the usable blockers past the cell, and the occludees weighed within this
-    /// distance.
-    pub fn reach(&self) -> f64 {
+    /// What a cell's bake reads, in three parts (metres, half-sides of squares; ARCHITECTURE.md
+    /// invariant 13): [`Reaches`].
+    pub fn reaches(&self) -> Reaches {
         let cell = self.frame.grid.cell_size;
-        // The far field: the block's blockers lie within `reach_m` of the block, which lies
-        // within its side of the cell's centre; its grounds, within the search of its cells.
-        let far = if self.blocks.side > 0 {
-            self.blocks.side as f64 * cell + self.params.far.reach_m.max(self.params.search_m)
+        let p = &self.params;
+        // One metre more everywhere, against rounding in the bake's box arithmetic.
+        let near = p.search_m + cell + 1.0;
+        if self.blocks.side == 0 {
+            return Reaches {
+                near,
+                weigh: p.weigh_m + 1.0,
+                block: 0.0,
+            };
+        }
+        let side = self.blocks.side as f64 * cell;
+        Reaches {
+            near,
+            // A block weighs its pieces from its own centre, at most a block's side from the
+            // cell's.
+            weigh: p.weigh_m + side + 1.0,
+            // The block's blockers within `far.reach_m` of it (its hidden maps a square of
+            // `far.reach_m` + half its side around its centre), its cells' grounds within
+            // `search_m` of them; the block lies within half its side of its centre.
+            block: side + p.far.reach_m.max(p.search_m) + 1.0,
+        }
+    }
+
+    /// How far from a cell's centre its bake reads the scene at most (metres, per axis): the
+    /// largest of its [`Reaches`], the block's measured from the cell.
+    pub fn reach(&self) -> f64 {
+        let r = self.reaches();
+        let half_block = 0.5 * self.blocks.side as f64 * self.frame.grid.cell_size;
+        r.near.max(r.weigh).max(if r.block > 0.0 {
+            r.block + half_block
         } else {
             0.0
-        };
-        (self.params.search_m + cell)
-            .max(self.params.weigh_m)
-            .max(far)
+        })
     }
 
     /// The cells to bake, ascending: those meeting the region and the walkable area, when
@@ -498,6 +520,22 @@ pub fn records(frame: &Frame, baked: &[CellBake]) -> Vec<CellRecord> {
 /// The store's bytes for a bake: [`records`], encoded.
 pub fn encode(frame: &Frame, baked: &[CellBake]) -> Result<Vec<u8>, FormatError> {
     encode_store(frame, &records(frame, baked))
+}
+
+/// What a cell's bake reads of the scene, as half-sides of squares (metres), beside the frame
+/// and the options ([`Plan::reaches`]; `bake/incremental.rs` hashes each part).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reaches {
+    /// Around the cell's centre: the objects whose blockers, order and all, its own search
+    /// reads (usable blockers within `cell ± search_m`, the ground level).
+    pub near: f64,
+    /// Around the cell's centre: the occludees its VOs and its block's far pieces are weighed
+    /// against, as boxes and costs (rule 3); their order does not matter (weights are sums of
+    /// costs over sets).
+    pub weigh: f64,
+    /// Around the centre of the cell's far-field block: what the block's own search reads,
+    /// order and all; 0 without blocks.
+    pub block: f64,
 }
 
 #[cfg(test)]
