@@ -53,7 +53,8 @@ bench:
 	$(CARGO) bench --locked -p vocc-bench
 
 # The bake at scale: generated cities of 10^4, 10^5 and 10^6 buildings, end to end, with peak
-# memory (about 10 minutes on 2 cores; `cargo bench -p vocc-bench --bench scale` alone runs 10^4 and 10^5).
+# memory. Since the far field (issue 31) the 10^6 city takes some 4-5 core-hours, about 2-2.5 hours
+# on 2 cores (docs/SCALING.md); `cargo bench -p vocc-bench --bench scale` alone runs 10^4 and 10^5.
 scale:
 	VOCC_SCALE=10000,100000,1000000 $(CARGO) bench --locked -p vocc-bench --bench scale
 
