@@ -3,7 +3,7 @@
 CARGO ?= cargo
 DEMO_SCENE := data/lyon1/buildings_lyon1.geojson
 
-.PHONY: build test test-long test-web web-bundle demo bench scale eval lint fresh-clone pictures fuzz header c-bench c-size
+.PHONY: build test test-long test-web web-bundle demo bench scale eval eval-tokyo lint fresh-clone pictures fuzz header c-bench c-size
 
 build:
 	$(CARGO) build --release
@@ -61,6 +61,12 @@ scale:
 # Regenerates docs/RESULTS.md and docs/img/*.svg from the bundled data (several minutes).
 eval:
 	$(CARGO) run --locked --release -- results -o docs/RESULTS.md
+
+# Tokyo centre, every 100 m cell (issue 31's figures): the default bake, then `vocc eval` of all
+# 961 cells by the three oracles, its report in docs/tokyo/ (about 25 minutes on 2 cores).
+eval-tokyo:
+	$(CARGO) run --locked --release -- bake $(TOKYO) --height-attr height -o target/tokyo.vocc
+	$(CARGO) run --locked --release -- eval target/tokyo.vocc $(TOKYO) --height-attr height --report docs/tokyo
 
 # Clippy on every workspace member: the library, the CLI (cli/), the C ABI (capi/, where every
 # unsafe block must carry a SAFETY comment), the Python binding (python/) and the benchmarks.

@@ -177,6 +177,11 @@ pub fn run(a: BakeArgs) -> Result<()> {
         eprintln!("note: {n}");
     }
     let load_s = t0.elapsed().as_secs_f64();
+    // A large scene takes seconds to load and to plan before the first cell: say where it is.
+    eprintln!(
+        "loaded {} in {load_s:.1} s; preparing the bake (blockers, frame, content hashes)",
+        plural(s.objects.len(), "object", "objects")
+    );
     let region = a.region.map(|[x0, y0, x1, y1]| {
         [
             x0 - s.origin.x,
