@@ -27,8 +27,8 @@
 //! around every cell took.
 //!
 //! The cell hash covers those objects, the near and the block's in index order; so two bakes
-//! with equal global hashes and an equal cell hash give that cell the same record, and `tests/incremental.rs` checks that an
-//! incremental rebake is byte-identical to a full bake. The hash is a 64-bit mix (splitmix64
+//! with equal global hashes and an equal cell hash give that cell the same record, and
+//! `tests/incremental.rs` checks that an incremental rebake is byte-identical to a full bake. The hash is a 64-bit mix (splitmix64
 //! finalizer per word), stable across platforms and runs; it guards against accidental change,
 //! not against an adversary.
 
@@ -364,11 +364,9 @@ impl CellHashes {
         let reaches = plan.reaches();
         // The far field's blocks: one ordered hash per block that a baked cell belongs to.
         let blocks = plan.blocks;
-        let mut wanted = vec![false; if blocks.side > 0 { blocks.count() } else { 0 }];
-        if blocks.side > 0 {
-            for &id in cells {
-                wanted[blocks.of(id % grid.nx, id / grid.nx)] = true;
-            }
+        let mut wanted = vec![false; blocks.count()];
+        for b in cells.iter().filter_map(|&id| plan.block_of(id)) {
+            wanted[b] = true;
         }
         let block_hash: Vec<u64> = (0..wanted.len())
             .into_par_iter()
@@ -389,14 +387,13 @@ impl CellHashes {
         let per_cell: Vec<(CellId, u64)> = cells
             .par_iter()
             .map(|&id| {
-                let [x0, y0, x1, y1] = grid.cell_rect(id).unwrap_or([0.0; 4]);
-                let centre = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+                let [cx, cy] = plan.frame.cell_centre(id).unwrap_or([0.0; 2]);
                 let mut h = Mix::new(3);
                 h.word(g.0);
-                h.word(ordered(5, centre, reaches.near));
-                h.word(weights.sum(centre, reaches.weigh));
-                if blocks.side > 0 {
-                    h.word(block_hash[blocks.of(id % grid.nx, id / grid.nx)]);
+                h.word(ordered(5, (cx, cy), reaches.near));
+                h.word(weights.sum((cx, cy), reaches.weigh));
+                if let Some(b) = plan.block_of(id) {
+                    h.word(block_hash[b]);
                 }
                 (id, h.finish())
             })

@@ -56,7 +56,7 @@ pub struct BakeParams {
     /// How far around a cell (per axis, past its sides) the blockers that may support its VOs
     /// are taken from, metres. Both generators; it also bounds the ground level's widening
     /// search, sets the quantization window (the quantum) and, with the cell size, the reach
-    /// ([`super::plan::Plan::reach`]); the growth follows its active lines this far.
+    /// ([`super::plan::Plan::reaches`]); the growth follows its active lines this far.
     pub search_m: f64,
     /// The growth's own knobs (seeds, chain length, bridges, tries, shortest VO, single-object
     /// chains, the dense set's verification). The growth only.

@@ -11,7 +11,7 @@
 //! [`super::growth`]. Both re-check every stored VO in its dequantized form with rule 2 and the
 //! exact verifier; a VO that fails is shrunk or dropped and counted.
 //! Invariants: the parameters are validated, and the grid's memory checked, before anything is
-//! allocated per cell; each cell is baked from the scene alone within [`Plan::reach`] (no state
+//! allocated per cell; each cell is baked from the scene alone within [`Plan::reaches`] (no state
 //! shared between cells), so the output is the same for any thread count and any order of
 //! cells; no cell gets more than [`MAX_VOS_PER_CELL`] VOs.
 
@@ -99,7 +99,7 @@ pub struct CellStats {
     /// costs. Long: the certified piece at its level (before quantization and raising). Growth:
     /// the dense VO at its chain's level.
     pub unquantized: Vec<VoGeom>,
-    /// Occludee cost hidden by the stored VOs together (rule 3, within [`Plan::reach`]). Both.
+    /// Occludee cost hidden by the stored VOs together (rule 3, within [`Plan::reaches`]). Both.
     pub hidden_cost: u64,
     /// Long only: length of the proposals sent to the exact verifier, and of the certified
     /// pieces kept from them, metres (the verifier's completeness).
@@ -274,15 +274,19 @@ impl<'s> Plan<'s> {
     /// The far pieces of the block of cell `id` ([`super::far`]): sought when a cell of the
     /// block first asks, the same whatever cell that is; none without blocks.
     pub fn far_pieces(&self, id: CellId) -> &[FarPiece] {
-        let g = &self.frame.grid;
-        if self.blocks.side == 0 || g.nx == 0 || id as u64 >= g.cell_count() {
-            return &[];
-        }
-        let b = self.blocks.of(id % g.nx, id / g.nx);
-        match self.far.get(b) {
-            Some(slot) => slot.get_or_init(|| super::far::block_pieces(self, b)),
+        match self.block_of(id).and_then(|b| Some((b, self.far.get(b)?))) {
+            Some((b, slot)) => slot.get_or_init(|| super::far::block_pieces(self, b)),
             None => &[],
         }
+    }
+
+    /// The far-field block of cell `id`; none without blocks or outside the grid.
+    pub fn block_of(&self, id: CellId) -> Option<usize> {
+        let g = &self.frame.grid;
+        if self.blocks.side == 0 || g.nx == 0 || id as u64 >= g.cell_count() {
+            return None;
+        }
+        Some(self.blocks.of(id % g.nx, id / g.nx))
     }
 
     pub fn scene(&self) -> &'s Scene {
@@ -318,18 +322,6 @@ impl<'s> Plan<'s> {
             // `search_m` of them; the block lies within half its side of its centre.
             block: side + p.far.reach_m.max(p.search_m) + 1.0,
         }
-    }
-
-    /// How far from a cell's centre its bake reads the scene at most (metres, per axis): the
-    /// largest of its [`Reaches`], the block's measured from the cell.
-    pub fn reach(&self) -> f64 {
-        let r = self.reaches();
-        let half_block = 0.5 * self.blocks.side as f64 * self.frame.grid.cell_size;
-        r.near.max(r.weigh).max(if r.block > 0.0 {
-            r.block + half_block
-        } else {
-            0.0
-        })
     }
 
     /// The cells to bake, ascending: those meeting the region and the walkable area, when
