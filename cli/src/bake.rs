@@ -335,6 +335,18 @@ fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
         "VOs: {} in {} ({:.2} per cell, at most {}); {ms}; quantization: {} tried, {} shrunk, {} dropped, {} exact checks",
         sum.vos, plural(sum.cells_selected, "cell", "cells"), sum.vos_per_cell, sum.max_vos, q.tried, q.shrunk, q.dropped, q.checks
     );
+    if !sum.stages_s.is_empty() {
+        // In the generator's order, not the map's.
+        let parts: Vec<String> = vocc::bake::plan::STAGES
+            .iter()
+            .filter_map(|k| {
+                sum.stages_s
+                    .get(*k)
+                    .map(|s| format!("{} {s:.1} s", k.replace('_', " ")))
+            })
+            .collect();
+        eprintln!("time by stage, summed over cells: {}", parts.join(", "));
+    }
     eprintln!(
         "wrote {} to {} ({:.1} bytes per cell over {})",
         plural(sum.store_bytes, "byte", "bytes"),

@@ -207,6 +207,9 @@ pub struct BakeSummary {
     pub ms_per_cell_median: Option<f64>,
     pub ms_per_cell_p95: Option<f64>,
     pub quantization: Quantization,
+    /// CPU seconds of the long generator's stages, summed over the baked cells, by name
+    /// ([`super::plan::STAGES`]): where a bake spends its time (empty under the growth).
+    pub stages_s: BTreeMap<String, f64>,
     /// Worker threads the cells were baked on.
     pub threads: usize,
     pub timings: Timings,
@@ -455,6 +458,16 @@ impl<'s> BakeJob<'s> {
                 dropped: q.dropped + c.stats.dropped,
                 checks: q.checks + c.stats.checks,
             });
+        let mut stages_s = BTreeMap::new();
+        if baked
+            .iter()
+            .any(|c| c.stats.stage_ms.iter().any(|&m| m > 0.0))
+        {
+            for (k, name) in super::plan::STAGES.iter().enumerate() {
+                let ms: f64 = baked.iter().map(|c| c.stats.stage_ms[k]).sum();
+                stages_s.insert(name.to_string(), ms * 1e-3);
+            }
+        }
         let g = plan.frame.grid;
         let summary = BakeSummary {
             grid: GridSummary {
@@ -479,6 +492,7 @@ impl<'s> BakeJob<'s> {
             ms_per_cell_median: pct(0.5),
             ms_per_cell_p95: pct(0.95),
             quantization,
+            stages_s,
             threads,
             timings,
             store_bytes: store.len(),

@@ -83,7 +83,9 @@ pub(super) fn long_vos_traced(
     );
     let certifier = certifier(plan, setup, &index);
     // The far field: pieces certified hidden from the cell's whole block.
+    stats.stage_ms[4] += clock(&mut t);
     let far = plan.far_pieces(setup.id);
+    stats.stage_ms[3] += clock(&mut t);
     let mut cs = CertifyStats::default();
     #[derive(Clone)]
     enum Vo {
@@ -177,7 +179,7 @@ pub(super) fn long_vos_traced(
             _ => None,
         })
         .collect();
-    stats.stage_ms[3] += clock(&mut t);
+    stats.stage_ms[4] += clock(&mut t);
     stats.tried = cs.tried;
     stats.raised = cs.raised;
     stats.shrunk = cs.shrunk;

@@ -68,6 +68,9 @@ pub enum BakeError {
     Grid(Box<super::budget::GridTooLarge>),
 }
 
+/// The long generator's stages, as [`CellStats::stage_ms`] and the bake's summary name them.
+pub const STAGES: [&str; 5] = ["maps", "proposals", "weights", "far_field", "selection"];
+
 /// What baking one cell took. Both generators fill `levels`, `dense`, `tried`, `shrunk`,
 /// `dropped`, `checks`, `unquantized` and `hidden_cost`, each in its own sense below;
 /// `proposed_m`, `certified_m`, `stage_ms` and `raised` are the long generator's alone (0 under
@@ -105,9 +108,10 @@ pub struct CellStats {
     /// pieces kept from them, metres (the verifier's completeness).
     pub proposed_m: f64,
     pub certified_m: f64,
-    /// Long only: time per stage, ms: hidden maps, proposals, rule-3 weights (with trimming),
-    /// selection with certification.
-    pub stage_ms: [f64; 4],
+    /// Long only: time per stage, ms ([`STAGES`]): hidden maps, proposals, rule-3 weights (with
+    /// trimming), the block's far field (its search counts in the cell that first asks for it,
+    /// the others find it cached), selection with certification.
+    pub stage_ms: [f64; STAGES.len()],
     /// Long only: levels the stored VOs were raised by after quantization (rule 2's tighter
     /// bounds for their own segment).
     pub raised: usize,

@@ -116,6 +116,22 @@ fn bake_json_summary_carries_cells_vos_timings_bytes_and_skipped_objects() {
     assert_eq!(v["store_bytes"], std::fs::metadata(&store).unwrap().len());
     assert!(v["vos"].as_u64().unwrap() > 10, "{v}");
     assert!(v["timings"]["bake_s"].as_f64().unwrap() > 0.0);
+    // Where the bake spent its time, by the long generator's stage: every stage named, none
+    // negative, together no more than the threads' time over the bake.
+    let stages = v["stages_s"].as_object().expect("stages_s");
+    let names: Vec<&str> = stages.keys().map(|k| k.as_str()).collect();
+    assert_eq!(
+        names,
+        ["far_field", "maps", "proposals", "selection", "weights"],
+        "{v}"
+    );
+    let sum: f64 = stages.values().map(|s| s.as_f64().unwrap()).sum();
+    assert!(stages.values().all(|s| s.as_f64().unwrap() >= 0.0), "{v}");
+    let budget = v["timings"]["bake_s"].as_f64().unwrap() * v["threads"].as_f64().unwrap();
+    assert!(
+        sum > 0.0 && sum <= budget * 1.01 + 1e-3,
+        "{sum} s of stages in {budget} s: {v}"
+    );
     assert_eq!(v["scene"]["skipped"], 1, "{v}");
     assert_eq!(
         v["scene"]["skipped_by_reason"]["no height attribute and no storey count"], 1,

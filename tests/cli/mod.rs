@@ -42,6 +42,10 @@ fn bake_lyon_region(dir: &std::path::Path) -> std::path::PathBuf {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("baked 9 cells"), "{err}");
     assert!(err.contains("bytes per cell"), "{err}");
+    assert!(
+        err.contains("time by stage, summed over cells: maps ") && err.contains(", selection "),
+        "{err}"
+    );
     store
 }
 
