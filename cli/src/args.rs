@@ -304,6 +304,18 @@ pub fn parse_bytes_per_cell(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses `bake --reach`: metres, [`MIN_REACH_M`](vocc::bake::params::MIN_REACH_M) to
+/// [`MAX_REACH_M`](vocc::bake::params::MAX_REACH_M).
+pub fn parse_reach(s: &str) -> Result<f64, String> {
+    use vocc::bake::params::{MAX_REACH_M, MIN_REACH_M};
+    match s.parse::<f64>() {
+        Ok(m) if (MIN_REACH_M..=MAX_REACH_M).contains(&m) => Ok(m),
+        _ => Err(format!(
+            "expected metres from {MIN_REACH_M} to {MAX_REACH_M}, got {s:?}"
+        )),
+    }
+}
+
 /// The most buildings `gen-city` writes: 10^7 take about 1.5 GB of memory and a 3 GB file.
 pub const MAX_GEN_BUILDINGS: u64 = 10_000_000;
 

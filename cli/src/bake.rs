@@ -19,7 +19,8 @@ use vocc::scene;
 
 use crate::args::{
     parse_bytes_per_cell, parse_cell_size, parse_count, parse_count_u32, parse_effort, parse_eye,
-    parse_generator, parse_max_vos, parse_rect, parse_shard, parse_slices, ReadArgs, ShardSpec,
+    parse_generator, parse_max_vos, parse_reach, parse_rect, parse_shard, parse_slices, ReadArgs,
+    ShardSpec,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::progress::Progress;
@@ -90,6 +91,13 @@ pub struct BakeArgs {
     /// trade bake time for culled share (docs/RESULTS.md, "Speed against culling").
     #[arg(long, default_value = "default", value_parser = parse_effort)]
     pub effort: Effort,
+    /// How far past a cell's sides its own VOs are sought, metres (100 to 5000): the blockers
+    /// that may support them, its hidden maps and its scan lines. A longer reach finds VOs
+    /// farther out, which close the wedges the near VOs leave open along streets seen end-on:
+    /// on a large city it culls much more for two to three times the bake time (README, "How
+    /// far a cell reaches"). Every reach is equally safe.
+    #[arg(long, default_value = "900", value_parser = parse_reach, value_name = "M")]
+    pub reach: f64,
     /// Which generator proposes the VOs: `long` (long hidden runs of lines, the default) or
     /// `growth` (aggregate umbrae grown from single buildings, the generator before 0.2; kept as a
     /// measured baseline).
@@ -203,7 +211,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
         bytes_per_cell: a.bytes_per_cell,
         generator: a.generator,
         region,
-        ..BakeParams::default().with_effort(a.effort)
+        ..BakeParams::default()
+            .with_effort(a.effort)
+            .with_reach(a.reach)
     };
     let mut job = BakeJob::new(&s, params)?;
     if let Some((i, n)) = shard {

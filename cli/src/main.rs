@@ -178,6 +178,9 @@ enum Command {
         /// --debug: eye heights above the ground, metres, as `vocc bake --eye`.
         #[arg(long, default_value = "1.5..2.0", value_parser = parse_eye, value_name = "LOW..HIGH", allow_hyphen_values = true)]
         eye: (f64, f64),
+        /// --debug: how far past the cell's sides its VOs are sought, metres, as `vocc bake --reach`.
+        #[arg(long, default_value = "900", value_parser = args::parse_reach, value_name = "M")]
+        reach: f64,
         /// STORE then scene files; with --debug, scene files only.
         #[arg(required = true)]
         files: Vec<PathBuf>,
@@ -375,6 +378,7 @@ fn run(cli: Cli) -> Result<i32> {
             debug,
             generator,
             eye,
+            reach,
             files,
             cell,
             at,
@@ -400,7 +404,9 @@ fn run(cli: Cli) -> Result<i32> {
                         "--debug takes --at X,Y, not --cell (it bakes no store)",
                     ));
                 }
-                render::render_debug(&files, &read, at, cell_size, eye, generator, slice, &output)
+                render::render_debug(
+                    &files, &read, at, cell_size, eye, reach, generator, slice, &output,
+                )
             } else {
                 if files.len() < 2 {
                     return Err(usage(

@@ -22,8 +22,8 @@ use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::store::{load_checked, which_cell};
 
 /// `vocc render --debug SCENE... --at X,Y`: what a generator does for the cell holding the
-/// point, on the bake's own grid and parameters (the bake job's plan, with `cell_size`, `eye`
-/// and `generator` as `vocc bake` takes them). The long generator (the default): its trace
+/// point, on the bake's own grid and parameters (the bake job's plan, with `cell_size`, `eye`,
+/// `reach` and `generator` as `vocc bake` takes them). The long generator (the default): its trace
 /// (hidden map, proposals, certified pieces, stored and picked VOs, [`crate::debug_svg`]). The
 /// growth: the 2D growth of one slice (`slice`, world metres; default half the median height).
 #[allow(clippy::too_many_arguments)]
@@ -33,6 +33,7 @@ pub fn render_debug(
     at: (f64, f64),
     cell_size: f64,
     eye: (f64, f64),
+    reach: f64,
     generator: Generator,
     slice: Option<f64>,
     output: &Path,
@@ -44,7 +45,7 @@ pub fn render_debug(
         cell_size,
         eye,
         generator,
-        ..BakeParams::default()
+        ..BakeParams::default().with_reach(reach)
     };
     let job = BakeJob::new(&s, params)?;
     let plan = job.plan();

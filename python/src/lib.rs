@@ -191,7 +191,7 @@ fn scene_boxes<'py>(
 #[pyfunction]
 #[pyo3(signature = (
     paths, read=None, cell_size=100.0, eye=(1.5, 2.0), slices=None, max_vos=10, region=None,
-    threads=None, effort="default", progress=None
+    threads=None, effort="default", progress=None, reach=900.0
 ))]
 #[allow(clippy::too_many_arguments)]
 fn bake<'py>(
@@ -206,6 +206,7 @@ fn bake<'py>(
     threads: Option<usize>,
     effort: &str,
     progress: Option<Py<PyAny>>,
+    reach: f64,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)> {
     let opts = read_options(read)?;
     let s = load(py, paths, opts)?;
@@ -216,7 +217,9 @@ fn bake<'py>(
         slices: slices.map_or(Slices::Auto, Slices::Fixed),
         max_vos,
         region: region.map(|(x0, y0, x1, y1)| [x0 - o.x, y0 - o.y, x1 - o.x, y1 - o.y]),
-        ..BakeParams::default().with_effort(effort.parse().map_err(VoccError::new_err)?)
+        ..BakeParams::default()
+            .with_effort(effort.parse().map_err(VoccError::new_err)?)
+            .with_reach(reach)
     };
     let mut job = BakeJob::new(&s, params).map_err(lib_err)?;
     if let Some(n) = threads {

@@ -181,6 +181,8 @@ def test_errors_carry_the_library_message(tmp_path, baked):
         vocc.bake([tmp_path / "missing.geojson"], height_attr="HAUTEUR", progress=False)
     with pytest.raises(vocc.VoccError, match=r"cell size must be .*, got -1"):
         vocc.bake([LYON], height_attr="HAUTEUR", cell_size=-1, progress=False)
+    with pytest.raises(vocc.VoccError, match=r"--reach must be 100 to 5000 m, got 50"):
+        vocc.bake([LYON], height_attr="HAUTEUR", reach=50, progress=False)
     with pytest.raises(vocc.VoccError, match="HAUTEUR_X"):
         vocc.bake([LYON], height_attr="HAUTEUR_X", progress=False)
     with pytest.raises(vocc.VoccError, match="outside the grid"):

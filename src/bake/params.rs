@@ -20,6 +20,11 @@ pub const MAX_CELL_SIZE_M: f64 = 1e5;
 /// How far around a cell the blockers of its VOs are looked for by default, metres
 /// ([`BakeParams::search_m`]).
 pub const SEARCH_M: f64 = 900.0;
+/// The shortest and longest reach a bake accepts, metres ([`BakeParams::with_reach`]): below
+/// 100 m a cell finds hardly any fused occlusion; beyond 5 km the far field
+/// ([`FarParams::reach_m`]) already serves, and each cell would read a whole district.
+pub const MIN_REACH_M: f64 = 100.0;
+pub const MAX_REACH_M: f64 = 5000.0;
 
 /// How many slices a cell gets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -220,5 +225,52 @@ impl BakeParams {
     pub fn with_effort(mut self, effort: Effort) -> BakeParams {
         effort.apply(&mut self);
         self
+    }
+
+    /// These parameters with a cell's own search reaching `reach_m` metres past its sides
+    /// (`vocc bake --reach`): its blockers (`search_m`), its hidden maps' half-side (the reach
+    /// plus the default's margin of 124 m) and its scan lines (`propose.max_offset`). The maps
+    /// keep their pixel count (256 per half-side), so their pixels grow with the reach: a VO
+    /// kilometres away needs angular, not metric, precision. [`SEARCH_M`] (900 m) gives the
+    /// defaults exactly. A longer reach finds VOs farther out, which close the wedges that the
+    /// near VOs' ends leave open along streets seen end-on, for more bake time (README, "How far
+    /// a cell reaches"). Checked by [`super::plan::Plan::new`] ([`MIN_REACH_M`] to
+    /// [`MAX_REACH_M`]).
+    pub fn with_reach(mut self, reach_m: f64) -> BakeParams {
+        let d = super::hidden::MapParams::default();
+        self.search_m = reach_m;
+        self.map.half = reach_m + (d.half - SEARCH_M);
+        self.map.px = d.px * self.map.half / d.half;
+        self.propose.max_offset = reach_m;
+        self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The default reach is the defaults, field for field (so `--reach 900` bakes the default's
+    /// bytes); another reach moves the search, the maps and the scan lines together and keeps
+    /// the maps' pixel count.
+    #[test]
+    fn reach_900_is_the_default_and_a_reach_keeps_the_maps_pixel_count() {
+        let d = BakeParams::default();
+        let r = BakeParams::default().with_reach(SEARCH_M);
+        assert_eq!(
+            (r.search_m, r.map, r.propose),
+            (d.search_m, d.map, d.propose)
+        );
+        let r = BakeParams::default().with_reach(2500.0);
+        assert_eq!(r.search_m, 2500.0);
+        assert_eq!(r.propose.max_offset, 2500.0);
+        assert_eq!(r.map.half, 2624.0);
+        assert_eq!(r.map.half / r.map.px, d.map.half / d.map.px);
+        assert_eq!((r.map.edge_eyes, r.map.bins), (d.map.edge_eyes, d.map.bins));
+        // The effort's settings are left alone, whichever comes first.
+        let t = BakeParams::default()
+            .with_effort(Effort::Tight)
+            .with_reach(2500.0);
+        assert_eq!((t.budget, t.map.edge_eyes), (60, 7));
     }
 }

@@ -59,6 +59,8 @@ pub enum BakeError {
     BytesPerCell(f64),
     #[error("--slices must be 1..=5, got {0}")]
     Slices(u8),
+    #[error("--reach must be {min} to {max} m, got {0}", min = super::params::MIN_REACH_M, max = super::params::MAX_REACH_M)]
+    Reach(f64),
     #[error("the scene has no objects")]
     EmptyScene,
     #[error("the grid would have {0} cells, more than 2^31; use larger cells")]
@@ -177,6 +179,12 @@ impl<'s> Plan<'s> {
             if n == 0 || n > 5 {
                 return Err(BakeError::Slices(n));
             }
+        }
+        let reach = params.search_m;
+        if !(reach.is_finite()
+            && (super::params::MIN_REACH_M..=super::params::MAX_REACH_M).contains(&reach))
+        {
+            return Err(BakeError::Reach(reach));
         }
         let ext = scene.extent();
         if ext.is_empty() {

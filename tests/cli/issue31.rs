@@ -50,3 +50,67 @@ fn eval_ceiling_reports_the_whole_scene_ceiling_of_the_evaluated_cells() {
         "{text}"
     );
 }
+
+/// Issue 31, a cell's reach: `vocc bake --reach 900` is the default bake byte for byte, a
+/// longer reach bakes another store on the same frame, and a reach out of range is a usage
+/// error naming the range, with no store written.
+#[test]
+fn bake_reach_900_is_the_default_and_out_of_range_is_refused() {
+    let dir = common::temp_dir("cli-bake-reach");
+    let default = bake_lyon_region(&dir);
+    let bake = |reach: &str, name: &str| {
+        let store = dir.join(name);
+        let out = vocc(&[
+            "bake",
+            LYON,
+            "--height-attr",
+            "HAUTEUR",
+            "--region",
+            "1841900,5175950,1842100,5176150",
+            "--reach",
+            reach,
+            "-o",
+            store.to_str().unwrap(),
+        ]);
+        (out, store)
+    };
+    let (out, same) = bake("900", "same.vocc");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read(&same).unwrap(),
+        std::fs::read(&default).unwrap()
+    );
+    let (out, far) = bake("1800", "far.vocc");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (a, b) = (
+        std::fs::read(&far).unwrap(),
+        std::fs::read(&default).unwrap(),
+    );
+    assert_ne!(a, b, "a 1.8 km reach bakes the same store as 900 m");
+    // The same frame (grid, origin, eyes, quantization: the far field's 3.4 km still sets
+    // the quantum), other VOs.
+    let (fa, fb) = (
+        vocc::runtime::format::Store::parse(&a).unwrap(),
+        vocc::runtime::format::Store::parse(&b).unwrap(),
+    );
+    assert_eq!(fa.frame(), fb.frame());
+    for (reach, name) in [
+        ("50", "low.vocc"),
+        ("6000", "high.vocc"),
+        ("far", "nan.vocc"),
+    ] {
+        let (out, store) = bake(reach, name);
+        assert_eq!(out.status.code(), Some(2), "--reach {reach}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("expected metres from 100 to 5000"), "{err}");
+        assert!(!store.exists(), "--reach {reach} wrote {}", store.display());
+    }
+}
