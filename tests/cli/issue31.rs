@@ -60,19 +60,7 @@ fn bake_reach_900_is_the_default_and_out_of_range_is_refused() {
     let default = bake_lyon_region(&dir);
     let bake = |reach: &str, name: &str| {
         let store = dir.join(name);
-        let out = vocc(&[
-            "bake",
-            LYON,
-            "--height-attr",
-            "HAUTEUR",
-            "--region",
-            "1841900,5175950,1842100,5176150",
-            "--reach",
-            reach,
-            "-o",
-            store.to_str().unwrap(),
-        ]);
-        (out, store)
+        (bake_lyon_region_with(&["--reach", reach], &store), store)
     };
     let (out, same) = bake("900", "same.vocc");
     assert!(

@@ -21,19 +21,25 @@ fn vocc(args: &[&str]) -> std::process::Output {
         .expect("vocc runs")
 }
 
-/// Bakes a 3 x 3-cell region of Lyon into `dir/lyon.vocc`.
-fn bake_lyon_region(dir: &std::path::Path) -> std::path::PathBuf {
-    let store = dir.join("lyon.vocc");
-    let out = vocc(&[
+/// Runs `vocc bake` on a 3 x 3-cell region of Lyon with `extra` options, into `store`.
+fn bake_lyon_region_with(extra: &[&str], store: &std::path::Path) -> std::process::Output {
+    let mut args = vec![
         "bake",
         LYON,
         "--height-attr",
         "HAUTEUR",
         "--region",
         "1841900,5175950,1842100,5176150",
-        "-o",
-        store.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    args.extend(["-o", store.to_str().unwrap()]);
+    vocc(&args)
+}
+
+/// Bakes a 3 x 3-cell region of Lyon into `dir/lyon.vocc`.
+fn bake_lyon_region(dir: &std::path::Path) -> std::path::PathBuf {
+    let store = dir.join("lyon.vocc");
+    let out = bake_lyon_region_with(&[], &store);
     assert!(
         out.status.success(),
         "{}",
