@@ -79,7 +79,8 @@ fresh-clone:
 
 # Regenerates the pictures in docs/img: the paper's Fig. 3 configuration, a Lyon cell, and two
 # Lyon cells before (the growth generator) and after (the long generator), like the paper's Fig. 8,
-# and a Tokyo cell the same way (its 2 MB SVGs are shot to PNG with Chromium: CHROMIUM=path).
+# and a Tokyo cell the same way (its 2 MB SVGs are shot to PNG with Chromium: CHROMIUM=path); an
+# interior cell of the generated 10^6 city at --reach 900 and 2500 (15 MB SVGs, shot to JPEG).
 TOKYO = data/tokyo-central/tokyo_central_utm54n.geojson
 CHROMIUM ?= chromium
 pictures:
@@ -115,6 +116,18 @@ pictures:
 		$(CHROMIUM) --headless --no-sandbox --disable-gpu --hide-scrollbars --window-size=900,980 \
 			--screenshot=$(CURDIR)/docs/img/$${st}_cell_480.png file://$(CURDIR)/target/tmp/pictures/$$st.svg \
 			|| exit 1; \
+	done
+	$(CARGO) run --locked --release -- gen-city --buildings 1000000 --seed 1 -o target/tmp/pictures/city.geojson
+	for reach in 900 2500; do \
+		$(CARGO) run --locked --release -- bake target/tmp/pictures/city.geojson --height-attr height \
+			--region 512001.6,5012001.6,512799.4,5012799.4 --reach $$reach \
+			-o target/tmp/pictures/city_$$reach.vocc && \
+		$(CARGO) run --locked --release -- render target/tmp/pictures/city_$$reach.vocc \
+			target/tmp/pictures/city.geojson --height-attr height --cell 31218 --radius 4000 \
+			-o target/tmp/pictures/city_$$reach.svg && \
+		$(CHROMIUM) --headless --no-sandbox --disable-gpu --hide-scrollbars --window-size=900,980 \
+			--screenshot=$(CURDIR)/docs/img/gen_city_1e6_reach_$$reach.jpg \
+			file://$(CURDIR)/target/tmp/pictures/city_$$reach.svg || exit 1; \
 	done
 
 # Fuzzing (docs/FUZZING.md): every cargo-fuzz target for FUZZ_SECONDS each (default 600), one after
