@@ -459,10 +459,7 @@ impl<'s> BakeJob<'s> {
                 checks: q.checks + c.stats.checks,
             });
         let mut stages_s = BTreeMap::new();
-        if baked
-            .iter()
-            .any(|c| c.stats.stage_ms.iter().any(|&m| m > 0.0))
-        {
+        if plan.params.generator == super::params::Generator::Long {
             for (k, name) in super::plan::STAGES.iter().enumerate() {
                 let ms: f64 = baked.iter().map(|c| c.stats.stage_ms[k]).sum();
                 stages_s.insert(name.to_string(), ms * 1e-3);
