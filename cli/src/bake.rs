@@ -94,8 +94,9 @@ pub struct BakeArgs {
     /// How far past a cell's sides its own VOs are sought, metres (100 to 5000): the blockers
     /// that may support them, its hidden maps and its scan lines. A longer reach finds VOs
     /// farther out, which close the wedges the near VOs leave open along streets seen end-on:
-    /// on a large city it culls much more for two to three times the bake time (README, "How
-    /// far a cell reaches"). Every reach is equally safe.
+    /// on a large city it culls much more for two to three times the bake time, on a compact
+    /// district a little less (its maps grow coarser; README, "How far a cell reaches"). Every
+    /// reach is equally safe.
     #[arg(long, default_value = "900", value_parser = parse_reach, value_name = "M")]
     pub reach: f64,
     /// Which generator proposes the VOs: `long` (long hidden runs of lines, the default) or
