@@ -316,6 +316,22 @@ pub fn parse_reach(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses `bake --far-block`: `off` (or 0) for no far field, or metres from the least cell
+/// size up to [`MAX_FAR_BLOCK_M`](vocc::bake::params::MAX_FAR_BLOCK_M) (rounded to whole cells,
+/// at least one, by the bake).
+pub fn parse_far_block(s: &str) -> Result<f64, String> {
+    use vocc::bake::params::MAX_FAR_BLOCK_M;
+    if s == "off" {
+        return Ok(0.0);
+    }
+    match s.parse::<f64>() {
+        Ok(m) if m == 0.0 || (MIN_CELL_SIZE_M..=MAX_FAR_BLOCK_M).contains(&m) => Ok(m),
+        _ => Err(format!(
+            "expected `off`, or metres from {MIN_CELL_SIZE_M} to {MAX_FAR_BLOCK_M}, got {s:?}"
+        )),
+    }
+}
+
 /// The most buildings `gen-city` writes: 10^7 take about 1.5 GB of memory and a 3 GB file.
 pub const MAX_GEN_BUILDINGS: u64 = 10_000_000;
 

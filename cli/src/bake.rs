@@ -19,8 +19,8 @@ use vocc::scene;
 
 use crate::args::{
     parse_bytes_per_cell, parse_cell_size, parse_count, parse_count_u32, parse_effort, parse_eye,
-    parse_generator, parse_max_vos, parse_reach, parse_rect, parse_shard, parse_slices, ReadArgs,
-    ShardSpec,
+    parse_far_block, parse_generator, parse_max_vos, parse_reach, parse_rect, parse_shard,
+    parse_slices, ReadArgs, ShardSpec,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::progress::Progress;
@@ -99,6 +99,15 @@ pub struct BakeArgs {
     /// reach is equally safe.
     #[arg(long, default_value = "900", value_parser = parse_reach, value_name = "M")]
     pub reach: f64,
+    /// The far field's blocks, metres a side (rounded to whole cells, at least one), or `off`.
+    /// The far field seeks long VOs kilometres out once per block, certified hidden from the
+    /// whole block, and offers them to its cells. Smaller blocks give each cell larger umbrae
+    /// for more bake time (on Tokyo centre, 1-cell blocks: 92.1% culled and median PVS/VS 4.08
+    /// against 90.9% and 4.38, for twice the time; README, "How far a cell reaches"); `off`
+    /// leaves the far field out (a small scene, where the cells' own reach covers it all). Every
+    /// size is equally safe.
+    #[arg(long, default_value = "400", value_parser = parse_far_block, value_name = "M|off")]
+    pub far_block: f64,
     /// Which generator proposes the VOs: `long` (long hidden runs of lines, the default) or
     /// `growth` (aggregate umbrae grown from single buildings, the generator before 0.2; kept as a
     /// measured baseline).
@@ -215,6 +224,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         ..BakeParams::default()
             .with_effort(a.effort)
             .with_reach(a.reach)
+            .with_far_block(a.far_block)
     };
     let mut job = BakeJob::new(&s, params)?;
     if let Some((i, n)) = shard {

@@ -61,6 +61,8 @@ pub enum BakeError {
     Slices(u8),
     #[error("--reach must be {min} to {max} m, got {0}", min = super::params::MIN_REACH_M, max = super::params::MAX_REACH_M)]
     Reach(f64),
+    #[error("--far-block must be 0 (off) or above 0 up to {max} m, got {0}", max = super::params::MAX_FAR_BLOCK_M)]
+    FarBlock(f64),
     #[error("the scene has no objects")]
     EmptyScene,
     #[error("the grid would have {0} cells, more than 2^31; use larger cells")]
@@ -185,6 +187,10 @@ impl<'s> Plan<'s> {
             && (super::params::MIN_REACH_M..=super::params::MAX_REACH_M).contains(&reach))
         {
             return Err(BakeError::Reach(reach));
+        }
+        let block = params.far.block_m;
+        if !(block == 0.0 || (block > 0.0 && block <= super::params::MAX_FAR_BLOCK_M)) {
+            return Err(BakeError::FarBlock(block));
         }
         let ext = scene.extent();
         if ext.is_empty() {

@@ -102,3 +102,52 @@ fn bake_reach_900_is_the_default_and_out_of_range_is_refused() {
         assert!(!store.exists(), "--reach {reach} wrote {}", store.display());
     }
 }
+
+/// Issue 31, the far field's blocks: `vocc bake --far-block 400` is the default bake byte for
+/// byte; 1-cell blocks and `off` bake other stores; a size out of range is a usage error naming
+/// the range, with no store written.
+#[test]
+fn bake_far_block_400_is_the_default_and_out_of_range_is_refused() {
+    let dir = common::temp_dir("cli-bake-far-block");
+    let default = std::fs::read(bake_lyon_region(&dir)).unwrap();
+    let bake = |block: &str, name: &str| {
+        let store = dir.join(name);
+        (
+            bake_lyon_region_with(&["--far-block", block], &store),
+            store,
+        )
+    };
+    for (block, name, same) in [
+        ("400", "same.vocc", true),
+        ("100", "cells.vocc", false),
+        ("off", "off.vocc", false),
+    ] {
+        let (out, store) = bake(block, name);
+        assert!(
+            out.status.success(),
+            "--far-block {block}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let bytes = std::fs::read(&store).unwrap();
+        assert_eq!(bytes == default, same, "--far-block {block}");
+        assert!(vocc::runtime::format::Store::parse(&bytes).is_ok());
+    }
+    for (block, name) in [
+        ("0.5", "low.vocc"),
+        ("20000", "high.vocc"),
+        ("near", "nan.vocc"),
+    ] {
+        let (out, store) = bake(block, name);
+        assert_eq!(out.status.code(), Some(2), "--far-block {block}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("expected `off`, or metres from 1 to 10000"),
+            "{err}"
+        );
+        assert!(
+            !store.exists(),
+            "--far-block {block} wrote {}",
+            store.display()
+        );
+    }
+}
