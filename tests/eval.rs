@@ -33,6 +33,17 @@ fn no_false_culls_with_a_two_kilometre_reach() {
     assert!(culled >= 25, "{culled} objects culled over the sample");
 }
 
+/// `vocc bake --far-block 100`: the far field sought for each cell alone (its block is the
+/// cell) is as safe as the default's 4 x 4-cell blocks, by the same oracles.
+#[test]
+fn no_false_culls_with_one_cell_far_blocks() {
+    let params = vocc::bake::params::BakeParams::default().with_far_block(100.0);
+    let (vos, rays, culled) = check_sample(params, 6, 13);
+    assert!(vos >= 15, "{vos} VOs");
+    assert!(rays >= 15 * 8 * 8 / 2, "{rays} rays checked the VOs");
+    assert!(culled >= 25, "{culled} objects culled over the sample");
+}
+
 /// Bakes `n` Lyon cells sampled with `seed` and checks each against the oracles: rays from eyes
 /// to its stored VOs meet real geometry first, and its PVS holds its ground-truth visible set.
 /// Returns the VOs stored, the rays cast to them and the objects culled, summed over the cells.
@@ -81,6 +92,13 @@ fn check_sample(
             "cell {id}: VS {} PVS {}",
             e.vs,
             e.pvs
+        );
+        // Every object kept yet hidden falls in exactly one distance band.
+        assert_eq!(
+            e.excess_by_distance.iter().sum::<usize>(),
+            e.pvs - e.vs,
+            "cell {id}: excess by distance {:?}",
+            e.excess_by_distance
         );
         culled += s.objects.len() - e.pvs;
         vos += store

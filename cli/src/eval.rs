@@ -208,6 +208,12 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
             "objects culled with the first k VOs: {}",
             by.join(", ")
         )?;
+        if let [a, b, c, d] = sum.mean_excess_by_distance[..] {
+            writeln!(
+                out,
+                "PVS beyond the VS (objects kept yet hidden), mean a cell by distance from it: {a:.0} within 300 m, {b:.0} at 300 m to 1 km, {c:.0} at 1 to 3 km, {d:.0} beyond 3 km"
+            )?;
+        }
         writeln!(
             out,
             "3D check of the stored VOs: {} rays from eye points to VO points, {} reached a VO unblocked",

@@ -36,6 +36,33 @@ pub struct CellEval {
     /// |PVS| with only the first k stored VOs, k = 0..=10 (k = 0: every object); empty when not
     /// measured.
     pub pvs_by_vos: Vec<usize>,
+    /// Objects of the PVS outside the VS (kept, yet hidden), by the distance from the cell's
+    /// centre to the centre of their box, in the bands of [`EXCESS_BANDS_M`] (within the first,
+    /// then between each two, then beyond the last): where the culling falls short. Empty when
+    /// not measured.
+    pub excess_by_distance: Vec<usize>,
+}
+
+/// The distance bands of [`CellEval::excess_by_distance`], metres: near VOs serve the first
+/// (a cell's own search reaches 900 m by default), the far field the others.
+pub const EXCESS_BANDS_M: [f64; 3] = [300.0, 1000.0, 3000.0];
+
+/// The objects of `pvs` outside `vs` (both ascending) by the distance of their box centre from
+/// `centre` ([`CellEval::excess_by_distance`]).
+pub fn excess_by_distance(scene: &Scene, centre: [f64; 2], vs: &[u32], pvs: &[u32]) -> Vec<usize> {
+    let mut bands = vec![0; EXCESS_BANDS_M.len() + 1];
+    for &i in pvs {
+        if vs.binary_search(&i).is_ok() {
+            continue;
+        }
+        let Some(o) = scene.objects.get(i as usize) else {
+            continue;
+        };
+        let c = 0.5 * (o.bbox.min + o.bbox.max);
+        let d = (c.x - centre[0]).hypot(c.y - centre[1]);
+        bands[EXCESS_BANDS_M.iter().take_while(|&&b| d > b).count()] += 1;
+    }
+    bands
 }
 
 impl CellEval {
@@ -144,9 +171,14 @@ pub fn eval_cell(scene: &Scene, store: &Store, tree: &BoxTree, id: CellId, vs: &
         pvs(f, id, &truncated(&rec, k), tree, &mut tmp);
         by.push(tmp.len());
     }
+    let excess = f
+        .cell_centre(id)
+        .map(|c| excess_by_distance(scene, c, vs, &out))
+        .unwrap_or_default();
     CellEval {
         pvs_us,
         pvs_by_vos: by,
+        excess_by_distance: excess,
         ..compare(scene, id, rec.vos().len(), vs, &out)
     }
 }
@@ -304,6 +336,9 @@ pub struct Summary {
     /// Mean occluded share with the first k VOs, k = 0..=10.
     pub occluded_by_vos: Vec<f64>,
     pub mean_vos: f64,
+    /// Mean of [`CellEval::excess_by_distance`] over the cells that measured it, band by band
+    /// (empty when none did).
+    pub mean_excess_by_distance: Vec<f64>,
 }
 
 pub fn percentile(v: &[f64], p: f64) -> f64 {
@@ -349,5 +384,24 @@ pub fn summarize(scene: &Scene, cells: &[CellEval]) -> Summary {
             })
             .collect(),
         mean_vos: mean(&|c| c.vos as f64),
+        mean_excess_by_distance: {
+            let measured: Vec<&CellEval> = cells
+                .iter()
+                .filter(|c| c.excess_by_distance.len() == EXCESS_BANDS_M.len() + 1)
+                .collect();
+            if measured.is_empty() {
+                Vec::new()
+            } else {
+                (0..=EXCESS_BANDS_M.len())
+                    .map(|k| {
+                        measured
+                            .iter()
+                            .map(|c| c.excess_by_distance[k] as f64)
+                            .sum::<f64>()
+                            / measured.len() as f64
+                    })
+                    .collect()
+            }
+        },
     }
 }
