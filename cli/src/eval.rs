@@ -208,10 +208,17 @@ pub fn eval(a: EvalArgs) -> Result<i32> {
             "objects culled with the first k VOs: {}",
             by.join(", ")
         )?;
-        if let [a, b, c, d] = sum.mean_excess_by_distance[..] {
+        if !sum.mean_excess_by_distance.is_empty() {
+            let bands: Vec<String> = sum
+                .mean_excess_by_distance
+                .iter()
+                .zip(vocc::eval::metrics::excess_band_names())
+                .map(|(n, name)| format!("{n:.0} {name}"))
+                .collect();
             writeln!(
                 out,
-                "PVS beyond the VS (objects kept yet hidden), mean a cell by distance from it: {a:.0} within 300 m, {b:.0} at 300 m to 1 km, {c:.0} at 1 to 3 km, {d:.0} beyond 3 km"
+                "PVS beyond the VS (objects kept yet hidden), mean a cell by distance from it: {}",
+                bands.join(", ")
             )?;
         }
         writeln!(

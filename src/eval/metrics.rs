@@ -47,6 +47,31 @@ pub struct CellEval {
 /// (a cell's own search reaches 900 m by default), the far field the others.
 pub const EXCESS_BANDS_M: [f64; 3] = [300.0, 1000.0, 3000.0];
 
+/// The names of the bands of [`EXCESS_BANDS_M`], for reports: "within 300 m", "at 300 m to
+/// 1 km", "at 1 to 3 km", "beyond 3 km".
+pub fn excess_band_names() -> Vec<String> {
+    let km = |m: f64| m >= 1000.0;
+    let name = |m: f64| {
+        if km(m) {
+            format!("{} km", m / 1000.0)
+        } else {
+            format!("{m} m")
+        }
+    };
+    let b = EXCESS_BANDS_M;
+    let mut names = vec![format!("within {}", name(b[0]))];
+    for w in b.windows(2) {
+        let lo = if km(w[0]) && km(w[1]) {
+            format!("{}", w[0] / 1000.0)
+        } else {
+            name(w[0])
+        };
+        names.push(format!("at {lo} to {}", name(w[1])));
+    }
+    names.push(format!("beyond {}", name(b[b.len() - 1])));
+    names
+}
+
 /// The objects of `pvs` outside `vs` (both ascending) by the distance of their box centre from
 /// `centre` ([`CellEval::excess_by_distance`]).
 pub fn excess_by_distance(scene: &Scene, centre: [f64; 2], vs: &[u32], pvs: &[u32]) -> Vec<usize> {
@@ -403,5 +428,23 @@ pub fn summarize(scene: &Scene, cells: &[CellEval]) -> Summary {
                     .collect()
             }
         },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn excess_band_names_read_as_the_report_prints_them() {
+        assert_eq!(
+            excess_band_names(),
+            [
+                "within 300 m",
+                "at 300 m to 1 km",
+                "at 1 to 3 km",
+                "beyond 3 km"
+            ]
+        );
     }
 }
