@@ -75,21 +75,6 @@ pub struct HiddenMap {
 }
 
 impl HiddenMap {
-    /// Marks visible the pixel at raster position `q` (in pixels), if inside.
-    ///
-    /// (Positions are truncated to `u32`, which saturates beyond the raster just as `usize`
-    /// would: the same pixels, for a cheaper conversion in the map's innermost loops.)
-    #[inline]
-    fn mark(&mut self, q: DVec2) {
-        if q.x >= 0.0 && q.y >= 0.0 {
-            let (ix, iy) = (q.x as u32 as usize, q.y as u32 as usize);
-            if ix < self.n && iy < self.n {
-                let k = iy * self.n + ix;
-                self.visible[k >> 6] |= 1 << (k & 63);
-            }
-        }
-    }
-
     /// Whether pixel `(ix, iy)` counts as hidden (outside the raster: no).
     #[inline]
     pub fn hidden_px(&self, ix: i64, iy: i64) -> bool {
@@ -186,6 +171,9 @@ impl HiddenMap {
         let groups = Groups::new(edges, member, centre);
         let mut depth = vec![vec![far; bins]; slices];
         let mut tile = vec![vec![far; bins / TILE]; slices];
+        // Every slice's pixels, one byte a pixel, bit `s` for slice `s` (split into the maps at
+        // the end).
+        let mut raster = vec![0u8; n * n];
         // Eyes on each edge, with the outward normal of that edge (corners: of both edges). A ray
         // into the cell crosses it and leaves through another edge, whose own eyes see beyond
         // it, so only rays leaving the cell are cast.
@@ -333,39 +321,94 @@ impl HiddenMap {
             // March every outward bin's ray up to its depth, marking the pixels it crosses. Rays
             // of a coarser level (more trailing zeros) are spaced less than a pixel apart up to
             // some distance; a finer ray starts there, or where a coarser neighbour stopped.
+            // The slices whose march starts at the same step walk the same points (the same
+            // start, the same additions), so they walk them once, into one byte a pixel with a
+            // bit a slice, each bit set while its own slice's march lasts: the pixels of each
+            // map are those of its own march.
             let o = (e - origin) / px;
             let dtheta = std::f64::consts::TAU / bins as f64;
-            for (map, depth) in maps.iter_mut().zip(&depth) {
-                for k in 0..bins {
-                    let d = dirs[k];
-                    if d.dot(out1) < 0.0 && d.dot(out2) < 0.0 {
-                        continue;
-                    }
+            for k in 0..bins {
+                let d = dirs[k];
+                if d.dot(out1) < 0.0 && d.dot(out2) < 0.0 {
+                    continue;
+                }
+                let mut first = [0usize; 8];
+                let mut steps = [0usize; 8];
+                let mut todo = 0u8;
+                for (s, depth) in depth.iter().enumerate() {
                     let len = depth[k].min(far);
                     let start = if k == 0 {
                         0.0
                     } else {
                         let tz = k.trailing_zeros();
-                        let s = 1usize << tz;
-                        let neighbours = depth[k - s].min(depth[(k + s) % bins]);
+                        let w = 1usize << tz;
+                        let neighbours = depth[k - w].min(depth[(k + w) % bins]);
                         (p.px / ((2 << tz) as f64 * dtheta)).min(neighbours)
                     };
                     if start < len {
-                        let first = (start / p.px) as usize;
-                        let steps = (len / p.px) as usize;
-                        let mut q = o + d * first as f64;
-                        for _ in first..=steps {
-                            map.mark(q);
-                            q += d;
-                        }
+                        first[s] = (start / p.px) as usize;
+                        steps[s] = (len / p.px) as usize;
+                        todo |= 1 << s;
                     }
                     // The pixel holding the end point (the surface itself).
-                    map.mark(o + d * (len / p.px));
+                    if let Some(at) = pixel(o + d * (len / p.px), n) {
+                        raster[at] |= 1 << s;
+                    }
                 }
+                while todo != 0 {
+                    let f = first[todo.trailing_zeros() as usize];
+                    let mut live = 0u8;
+                    for s in set_bits(todo) {
+                        if first[s] == f {
+                            live |= 1 << s;
+                        }
+                    }
+                    todo &= !live;
+                    let mut q = o + d * f as f64;
+                    let mut i = f;
+                    while live != 0 {
+                        // March to the nearest end among the live slices, then drop it.
+                        let end = set_bits(live).map(|s| steps[s]).min().unwrap_or(0);
+                        while i <= end {
+                            if let Some(at) = pixel(q, n) {
+                                raster[at] |= live;
+                            }
+                            q += d;
+                            i += 1;
+                        }
+                        for s in set_bits(live) {
+                            if steps[s] == end {
+                                live &= !(1 << s);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        for (s, map) in maps.iter_mut().enumerate() {
+            for (word, bytes) in map.visible.iter_mut().zip(raster.chunks(64)) {
+                *word = bytes
+                    .iter()
+                    .enumerate()
+                    .fold(0u64, |w, (j, &b)| w | (((b >> s) & 1) as u64) << j);
             }
         }
         maps
     }
+}
+
+/// The index of the pixel at raster position `q` (in pixels) on an `n` by `n` raster, row-major,
+/// if it lies on it. (Positions are truncated to `u32`, which saturates beyond the raster just
+/// as `usize` would: the same pixels, for a cheaper conversion in the map's innermost loops.)
+#[inline]
+fn pixel(q: DVec2, n: usize) -> Option<usize> {
+    if q.x >= 0.0 && q.y >= 0.0 {
+        let (ix, iy) = (q.x as u32 as usize, q.y as u32 as usize);
+        if ix < n && iy < n {
+            return Some(iy * n + ix);
+        }
+    }
+    None
 }
 
 /// Edges in square groups (by the cell of a grid their first end lies in), groups ordered by
