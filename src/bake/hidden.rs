@@ -387,13 +387,32 @@ impl HiddenMap {
         }
         for (s, map) in maps.iter_mut().enumerate() {
             for (word, bytes) in map.visible.iter_mut().zip(raster.chunks(64)) {
-                *word = bytes
-                    .iter()
-                    .enumerate()
-                    .fold(0u64, |w, (j, &b)| w | (((b >> s) & 1) as u64) << j);
+                *word = slice_bits(bytes, s);
             }
         }
         maps
+    }
+}
+
+/// Bit `s` of each of up to 64 bytes, as the bits of a word (byte `j` to bit `j`).
+#[inline]
+fn slice_bits(bytes: &[u8], s: usize) -> u64 {
+    if let Ok(chunk) = <&[u8; 64]>::try_from(bytes) {
+        // Eight bytes at a time: bit `s` of each byte down to bit 0, then the multiply sends
+        // bit 0 of byte `i` to bit `56 + i` (the products of other bytes land elsewhere and
+        // carry nothing into the top byte).
+        let mut w = 0u64;
+        for (i, b) in chunk.chunks_exact(8).enumerate() {
+            let x =
+                (u64::from_le_bytes(b.try_into().unwrap_or([0; 8])) >> s) & 0x0101_0101_0101_0101;
+            w |= (x.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * i);
+        }
+        w
+    } else {
+        bytes
+            .iter()
+            .enumerate()
+            .fold(0u64, |w, (j, &b)| w | (((b >> s) & 1) as u64) << j)
     }
 }
 

@@ -276,3 +276,31 @@ fn regression_walls_are_kept_in_both_directions() {
     assert!(map.hidden(DVec2::new(50.0, 200.0)));
     assert!(!map.hidden(DVec2::new(50.0, 120.0)));
 }
+
+/// The eight-bytes-at-a-time gather of [`slice_bits`] against the plain one, on random bytes and
+/// on a short tail.
+#[test]
+fn slice_bits_gathers_bit_s_of_each_byte() {
+    let mut x = 0x9e37_79b9_7f4a_7c15u64;
+    let mut bytes = [0u8; 64];
+    for round in 0..200 {
+        for b in bytes.iter_mut() {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            *b = x as u8;
+        }
+        let n = if round % 2 == 0 { 64 } else { 1 + round % 63 };
+        for s in 0..8 {
+            let plain = bytes[..n]
+                .iter()
+                .enumerate()
+                .fold(0u64, |w, (j, &b)| w | (((b >> s) & 1) as u64) << j);
+            assert_eq!(
+                super::slice_bits(&bytes[..n], s),
+                plain,
+                "round {round}, bit {s}"
+            );
+        }
+    }
+}
