@@ -8,7 +8,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 
 use rayon::prelude::*;
@@ -315,6 +315,12 @@ pub struct ResultsArgs {
     /// Cells sampled for the sweeps.
     #[arg(long, default_value_t = 40, value_parser = parse_count)]
     pub sample: usize,
+    /// Regenerate only this dataset's section (its `##` heading, e.g. "Tokyo centre") and its
+    /// plots, and keep the rest of the existing output file as it is: for a dataset added to the
+    /// suite, or one that a change alone concerns. The file must exist; a section not in it is
+    /// added at its end.
+    #[arg(long, value_name = "NAME")]
+    pub only: Option<String>,
     #[command(flatten)]
     pub truth: TruthArgs,
 }
@@ -334,12 +340,14 @@ pub fn results(a: ResultsArgs) -> Result<()> {
                 ..ReadOptions::default()
             },
             flags: "--height-attr HAUTEUR".into(),
+            size_sample: None,
         },
         Dataset {
             name: "Den Haag".into(),
             files: vec![PathBuf::from("data/denhaag/DenHaag_01.json")],
             read: ReadOptions::default(),
             flags: String::new(),
+            size_sample: None,
         },
         // Terrain (issue 32): Den Haag without its TIN, and Salt River (Cape Town) on its slope
         // without terrain and on the 25 m DEM.
@@ -351,6 +359,7 @@ pub fn results(a: ResultsArgs) -> Result<()> {
                 ..ReadOptions::default()
             },
             flags: "--no-terrain".into(),
+            size_sample: None,
         },
         Dataset {
             name: "Salt River".into(),
@@ -363,6 +372,7 @@ pub fn results(a: ResultsArgs) -> Result<()> {
                 ..ReadOptions::default()
             },
             flags: "--height-attr height --base-attr base_z".into(),
+            size_sample: None,
         },
         Dataset {
             name: "Salt River with the DEM".into(),
@@ -376,6 +386,7 @@ pub fn results(a: ResultsArgs) -> Result<()> {
                 ..ReadOptions::default()
             },
             flags: "--height-attr height --base-attr base_z --terrain data/capetown/capetown_dem25m_utm34s.tif".into(),
+            size_sample: None,
         },
         // Open LoD2 meshes: Den Haag without its ground faces (tools/denhaag_no_ground.py),
         // and Gelderseplein (3DBAG, overlapping levels of detail).
@@ -384,12 +395,28 @@ pub fn results(a: ResultsArgs) -> Result<()> {
             files: vec![PathBuf::from("data/denhaag/DenHaag_01_noground.json")],
             read: ReadOptions::default(),
             flags: String::new(),
+            size_sample: None,
         },
         Dataset {
             name: "Gelderseplein".into(),
             files: vec![PathBuf::from("data/gelderseplein/gelderseplein.obj")],
             read: ReadOptions::default(),
             flags: String::new(),
+            size_sample: None,
+        },
+        // A whole city centre (issue 31): 13,699 buildings over 3 x 3 km, towers to 214 m; the
+        // cell sizes on the sample, since its ground truth at 50 m on every cell takes hours.
+        Dataset {
+            name: TOKYO.into(),
+            files: vec![PathBuf::from(
+                "data/tokyo-central/tokyo_central_utm54n.geojson",
+            )],
+            read: ReadOptions {
+                height_attr: Some("height".into()),
+                ..ReadOptions::default()
+            },
+            flags: "--height-attr height".into(),
+            size_sample: Some(a.sample),
         },
     ];
     let mesh_datasets = [
@@ -414,6 +441,26 @@ pub fn results(a: ResultsArgs) -> Result<()> {
         sample: a.sample,
         seed: a.truth.seed,
     };
+    if let Some(name) = &a.only {
+        let Some(d) = datasets.iter().find(|d| &d.name == name) else {
+            let names: Vec<&str> = datasets.iter().map(|d| d.name.as_str()).collect();
+            anyhow::bail!(
+                "--only {name:?}: no such dataset; the suite's datasets are {}",
+                names.join(", ")
+            );
+        };
+        let old = std::fs::read_to_string(&a.output).with_context(|| {
+            format!(
+                "--only keeps the rest of {}, which must exist (run `vocc results` without --only first)",
+                a.output.display()
+            )
+        })?;
+        let sec = dataset_section(d, &params, &img, &|m| eprintln!("{m}"))?;
+        let md = splice_section(&old, &d.name, &sec);
+        write_atomically(&a.output, |w| w.write_all(md.as_bytes()))?;
+        eprintln!("wrote the section {name:?} of {}", a.output.display());
+        return Ok(());
+    }
     let mut md = String::from(
         "# Results\n\nEvery figure here comes from `make eval` (`vocc results`), which bakes the bundled datasets, \
          builds each cell's PVS with the runtime culler from the stored bytes, and compares it with the ground-truth \
@@ -429,4 +476,70 @@ pub fn results(a: ResultsArgs) -> Result<()> {
     write_atomically(&a.output, |w| w.write_all(md.as_bytes()))?;
     eprintln!("wrote {}", a.output.display());
     Ok(())
+}
+
+/// The name of the whole-city dataset of `vocc results`.
+const TOKYO: &str = "Tokyo centre";
+
+/// `doc` with its section `## name` (from that heading to the next `## ` heading, or the end)
+/// replaced by `section`; appended at the end when `doc` has no such section.
+fn splice_section(doc: &str, name: &str, section: &str) -> String {
+    let heading = format!("## {name}\n");
+    let start = if doc.starts_with(&heading) {
+        Some(0)
+    } else {
+        doc.find(&format!("\n{heading}")).map(|i| i + 1)
+    };
+    match start {
+        Some(i) => {
+            let after = i + heading.len();
+            let end = doc[after..]
+                .find("\n## ")
+                .map_or(doc.len(), |j| after + j + 1);
+            format!("{}{}{}", &doc[..i], section, &doc[end..])
+        }
+        None => {
+            let sep = if doc.is_empty() || doc.ends_with('\n') {
+                ""
+            } else {
+                "\n"
+            };
+            format!("{doc}{sep}{section}")
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::splice_section;
+
+    const DOC: &str = "# Results\n\nintro\n\n## Lyon\n\nold Lyon\n### Table\n\n## Den Haag\n\nDH\n";
+
+    #[test]
+    fn splice_section_replaces_only_its_own_section() {
+        let out = splice_section(DOC, "Lyon", "## Lyon\n\nnew Lyon\n\n");
+        assert_eq!(
+            out,
+            "# Results\n\nintro\n\n## Lyon\n\nnew Lyon\n\n## Den Haag\n\nDH\n"
+        );
+        // The last section, up to the end of the file.
+        let out = splice_section(DOC, "Den Haag", "## Den Haag\n\nnew\n");
+        assert_eq!(
+            out,
+            "# Results\n\nintro\n\n## Lyon\n\nold Lyon\n### Table\n\n## Den Haag\n\nnew\n"
+        );
+    }
+
+    #[test]
+    fn splice_section_appends_a_new_section_and_matches_whole_headings() {
+        // "## Den" is not the heading "## Den Haag", and "### Table" is no section.
+        let out = splice_section(DOC, "Den", "## Den\n\nx\n");
+        assert_eq!(out, format!("{DOC}## Den\n\nx\n"));
+        let out = splice_section(DOC, "Table", "## Table\n\ny\n");
+        assert_eq!(out, format!("{DOC}## Table\n\ny\n"));
+        assert_eq!(
+            splice_section("no newline", "A", "## A\n"),
+            "no newline\n## A\n"
+        );
+    }
 }
