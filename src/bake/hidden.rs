@@ -11,7 +11,10 @@
 //! Method: per eye, a polar depth buffer (the distance to the first edge along the central ray
 //! of each angular bin, edges taken near to far and skipped when a coarse tile maximum shows them
 //! wholly behind what is already there), then every bin's ray marks the pixels it crosses up to
-//! that depth.
+//! that depth. The slices whose march along a ray starts at the same step share it: it walks
+//! once into a raster of one byte a pixel, a bit a slice, each bit set while its own slice's
+//! march lasts (the same points by the same additions, so the same pixels), and the bytes are
+//! split into the slices' bit maps at the end.
 //! Invariant: a proposal only, sampled in floating point. Nothing here decides occlusion: a
 //! segment lying in hidden pixels is a candidate VO, which the exact verifier alone certifies
 //! (`super::certify`). Sampling can miss a narrow view (a gap thinner than a bin, an eye
