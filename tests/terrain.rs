@@ -173,3 +173,44 @@ fn salt_river_on_its_dem_passes_the_three_oracles_at_50_100_and_200_m() {
     }
     assert!(vos >= 10, "{vos} VOs checked");
 }
+
+/// `BakeSummary::ground_rise_m` (what `vocc bake` prints as "the ground rises ... m across the
+/// median cell"): over the selected cells on the DEM, the median and the greatest rise, each at
+/// least the span of the terrain over its cell (the eyes must cover a camera anywhere on the
+/// slope); none without a terrain.
+#[test]
+fn bake_summary_tells_how_far_the_ground_rises_across_the_cells() {
+    use vocc::bake::job::BakeJob;
+    use vocc::bake::params::BakeParams;
+    let s = salt_river(true);
+    let job = BakeJob::new(&s, BakeParams::default()).unwrap();
+    let grid = job.plan().frame.grid;
+    let ids: Vec<u32> = (0..grid.cell_count() as u32).step_by(97).collect();
+    let job = job.cells(&ids).unwrap();
+    let out = job.run(&|_| {}).unwrap();
+    let [median, most] = out.summary.ground_rise_m.expect("on a terrain");
+    let terrain = s.terrain.as_ref().unwrap();
+    let spans: Vec<f64> = ids
+        .iter()
+        .filter_map(|&id| {
+            let r = grid.cell_rect(id)?;
+            let (lo, hi) =
+                terrain.range(glam::DVec2::new(r[0], r[1]), glam::DVec2::new(r[2], r[3]))?;
+            Some(hi - lo)
+        })
+        .collect();
+    let widest = spans.iter().copied().fold(0.0, f64::max);
+    assert!(median > 0.0 && median <= most, "{median} {most}");
+    assert!(
+        most >= widest - 0.5,
+        "rise {most} m, widest ground span {widest} m"
+    );
+    let flat = salt_river(false);
+    let out = BakeJob::new(&flat, BakeParams::default())
+        .unwrap()
+        .cells(&ids[..2])
+        .unwrap()
+        .run(&|_| {})
+        .unwrap();
+    assert_eq!(out.summary.ground_rise_m, None);
+}

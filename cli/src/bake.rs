@@ -368,6 +368,11 @@ fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
             .collect();
         eprintln!("time by stage, summed over cells: {}", parts.join(", "));
     }
+    if let Some([median, most]) = sum.ground_rise_m {
+        eprintln!(
+            "terrain: the ground rises {median:.2} m across the median cell, {most:.2} m at most; a cell's eyes span its rise and the eye range, and the more they span the less it culls (smaller cells on a slope: README, \"Low-rise ground on a slope\")"
+        );
+    }
     eprintln!(
         "wrote {} to {} ({:.1} bytes per cell over {})",
         plural(sum.store_bytes, "byte", "bytes"),

@@ -220,6 +220,11 @@ pub struct BakeSummary {
     /// Present when an older store was given for reuse.
     pub reuse: Option<ReuseDecision>,
     pub scene: SceneCounts,
+    /// On a terrain: how far the ground rises across the selected cells that stand on it
+    /// (metres, from each cell's stored ground level to its highest ground): the median and the
+    /// most. A cell's eyes span that rise plus the eye range, and a cell whose eyes span more
+    /// culls less (README, "Low-rise ground on a slope").
+    pub ground_rise_m: Option<[f64; 2]>,
 }
 
 /// What a bake job returns.
@@ -497,6 +502,16 @@ impl<'s> BakeJob<'s> {
             bytes_per_cell: store.len() as f64 / recs.len().max(1) as f64,
             reuse,
             scene: SceneCounts::of(plan.scene()),
+            ground_rise_m: plan.ground.as_ref().and_then(|t| {
+                let mut r: Vec<f64> = cells
+                    .iter()
+                    .filter(|&&id| t.fits.get(id as usize).copied().unwrap_or(false))
+                    .filter_map(|&id| t.rises.get(id as usize))
+                    .map(|&r| r as f64 * t.ground_step)
+                    .collect();
+                r.sort_by(f64::total_cmp);
+                Some([*r.get((r.len().checked_sub(1)?) / 2)?, *r.last()?])
+            }),
         };
         Ok(BakeOutput {
             store,
