@@ -58,9 +58,11 @@ bench:
 scale:
 	VOCC_SCALE=10000,100000,1000000 $(CARGO) bench --locked -p vocc-bench --bench scale
 
-# Regenerates docs/RESULTS.md and docs/img/*.svg from the bundled data (several minutes).
+# Regenerates docs/RESULTS.md and docs/img/*.svg from the bundled data (about 2 hours on 2 cores
+# before Tokyo centre was added, which takes about 40 minutes more). `make eval ONLY="Tokyo centre"`
+# regenerates one dataset's section and keeps the rest of the file (`vocc results --only`).
 eval:
-	$(CARGO) run --locked --release -- results -o docs/RESULTS.md
+	$(CARGO) run --locked --release -- results -o docs/RESULTS.md $(if $(ONLY),--only "$(ONLY)")
 
 # Tokyo centre, every 100 m cell (issue 31's figures): the default bake, then `vocc eval` of all
 # 961 cells by the three oracles, its report in docs/tokyo/ (about 25 minutes on 2 cores).
