@@ -15,11 +15,7 @@ use vocc::runtime::format::{CellRecord, Store};
 
 #[test]
 fn no_false_culls_on_a_seeded_sample_of_lyon_cells() {
-    let (vos, rays, culled) = check_sample(Default::default(), 12, 7);
-    // The check must have something to check: VOs that cull.
-    assert!(vos >= 30, "{vos} VOs");
-    assert!(rays >= 30 * 8 * 8 / 2, "{rays} rays checked the VOs");
-    assert!(culled >= 50, "{culled} objects culled over the sample");
+    check_sample_culls(Default::default(), 12, 7, 30, 50);
 }
 
 /// `vocc bake --reach`: a cell's own search 2 km past its sides (the whole Lyon extract) is as
@@ -27,10 +23,7 @@ fn no_false_culls_on_a_seeded_sample_of_lyon_cells() {
 #[test]
 fn no_false_culls_with_a_two_kilometre_reach() {
     let params = vocc::bake::params::BakeParams::default().with_reach(2000.0);
-    let (vos, rays, culled) = check_sample(params, 6, 11);
-    assert!(vos >= 15, "{vos} VOs");
-    assert!(rays >= 15 * 8 * 8 / 2, "{rays} rays checked the VOs");
-    assert!(culled >= 25, "{culled} objects culled over the sample");
+    check_sample_culls(params, 6, 11, 15, 25);
 }
 
 /// `vocc bake --far-block 100`: the far field sought for each cell alone (its block is the
@@ -38,10 +31,28 @@ fn no_false_culls_with_a_two_kilometre_reach() {
 #[test]
 fn no_false_culls_with_one_cell_far_blocks() {
     let params = vocc::bake::params::BakeParams::default().with_far_block(100.0);
-    let (vos, rays, culled) = check_sample(params, 6, 13);
-    assert!(vos >= 15, "{vos} VOs");
-    assert!(rays >= 15 * 8 * 8 / 2, "{rays} rays checked the VOs");
-    assert!(culled >= 25, "{culled} objects culled over the sample");
+    check_sample_culls(params, 6, 13, 15, 25);
+}
+
+/// [`check_sample`], which must have something to check: at least `min_vos` VOs stored, half
+/// of their 8 x 8 rays cast, and at least `min_culled` objects culled over the sample.
+fn check_sample_culls(
+    params: vocc::bake::params::BakeParams,
+    n: usize,
+    seed: u64,
+    min_vos: usize,
+    min_culled: usize,
+) {
+    let (vos, rays, culled) = check_sample(params, n, seed);
+    assert!(vos >= min_vos, "{vos} VOs");
+    assert!(
+        rays >= (min_vos * 8 * 8 / 2) as u64,
+        "{rays} rays checked the VOs"
+    );
+    assert!(
+        culled >= min_culled,
+        "{culled} objects culled over the sample"
+    );
 }
 
 /// Bakes `n` Lyon cells sampled with `seed` and checks each against the oracles: rays from eyes

@@ -90,16 +90,36 @@ fn bake_reach_900_is_the_default_and_out_of_range_is_refused() {
         vocc::runtime::format::Store::parse(&b).unwrap(),
     );
     assert_eq!(fa.frame(), fb.frame());
-    for (reach, name) in [
-        ("50", "low.vocc"),
-        ("6000", "high.vocc"),
-        ("far", "nan.vocc"),
-    ] {
-        let (out, store) = bake(reach, name);
-        assert_eq!(out.status.code(), Some(2), "--reach {reach}");
+    assert_refused(
+        "--reach",
+        &bake,
+        ["50", "6000", "far"],
+        "expected metres from 100 to 5000",
+    );
+}
+
+/// Each of `values` given to `option` through `bake` (the value and a store name, to the
+/// process's output and the store's path) is a usage error whose message holds `expected`,
+/// with no store written.
+fn assert_refused(
+    option: &str,
+    bake: &dyn Fn(&str, &str) -> (std::process::Output, std::path::PathBuf),
+    values: [&str; 3],
+    expected: &str,
+) {
+    for (value, name) in values
+        .into_iter()
+        .zip(["low.vocc", "high.vocc", "nan.vocc"])
+    {
+        let (out, store) = bake(value, name);
+        assert_eq!(out.status.code(), Some(2), "{option} {value}");
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains("expected metres from 100 to 5000"), "{err}");
-        assert!(!store.exists(), "--reach {reach} wrote {}", store.display());
+        assert!(err.contains(expected), "{err}");
+        assert!(
+            !store.exists(),
+            "{option} {value} wrote {}",
+            store.display()
+        );
     }
 }
 
@@ -132,22 +152,10 @@ fn bake_far_block_400_is_the_default_and_out_of_range_is_refused() {
         assert_eq!(bytes == default, same, "--far-block {block}");
         assert!(vocc::runtime::format::Store::parse(&bytes).is_ok());
     }
-    for (block, name) in [
-        ("0.5", "low.vocc"),
-        ("20000", "high.vocc"),
-        ("near", "nan.vocc"),
-    ] {
-        let (out, store) = bake(block, name);
-        assert_eq!(out.status.code(), Some(2), "--far-block {block}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.contains("expected `off`, or metres from 1 to 10000"),
-            "{err}"
-        );
-        assert!(
-            !store.exists(),
-            "--far-block {block} wrote {}",
-            store.display()
-        );
-    }
+    assert_refused(
+        "--far-block",
+        &bake,
+        ["0.5", "20000", "near"],
+        "expected `off`, or metres from 1 to 10000",
+    );
 }
