@@ -53,7 +53,9 @@
 //! ## The search: a sweep along the segment
 //! Parameters along `s` are dyadic, `t = j / 2^30`, and a point is used only when `a + t (b - a)`
 //! is exactly representable (checked), so it lies exactly on `s` and consecutive pieces tile `s`
-//! with no gap. From the current point `q` (first `a`) a certificate is read off at `q` and a
+//! with no gap. Such points are dense only when `a` and `b` have few significant bits: callers
+//! put ends on the VO grid (2^-10 m, ARCHITECTURE.md invariant 8); with full-mantissa ends the
+//! first exact point after `a` may lie halfway along, and the sweep certifies little. From the current point `q` (first `a`) a certificate is read off at `q` and a
 //! probe point a little ahead (the tangent vertices of each blocker near them, then a
 //! chain of overlapping chords that covers the cell's angle, greedily (from the arc that covers the
 //! cell's first tangent, each time the arc reaching farthest), joining
