@@ -39,7 +39,15 @@
 //! **Joins.** A building blocker standing from `b` to `t` over `P` whose box lies in `D` and
 //! over which the terrain's least height is at least `b` stands on solid ground: the prism
 //! from `f` to `b` over `P` lies in the ground (every point has `z <= b <= T(p)`), so the union
-//! from `f` to `t` is solid, and the blocker's base becomes `f` ([`Terrain::join`]).
+//! from `f` to `t` is solid, and the blocker's base becomes `f` ([`Terrain::join`]). The least
+//! height is taken over `P` itself, not its box (on a slope a box's low corner may lie off the
+//! building, [`Terrain::least_over`]): for `p` in `P`, `T(p)` is at least the height at `p` of
+//! any triangle holding `p`, so at least the least, over the triangles meeting `P`, of a
+//! triangle's plane over its intersection with `P` (a linear function is least over a convex
+//! polygon at a vertex). The intersection is clipped in floating point: its vertices move by
+//! rounding only (far below [`HEIGHT_MARGIN_M`] at slopes up to [`STEEP`]), and a triangle
+//! whose clipped polygon rounding emptied though it meets `P`'s interior (an exact test) gives
+//! its lowest vertex. A wall (no area) keeps its box.
 //!
 //! Invariants: everything is local; the blockers' squares are aligned on a power-of-two grid
 //! from the terrain's minimum corner, never overlap, and each has a top above the floor;
@@ -52,7 +60,8 @@ use glam::{DVec2, DVec3};
 
 use super::Blocker;
 use crate::geom::predicates::{
-    orient, point_in_convex, segment_meets_convex, Containment, Orientation,
+    convex_interiors_disjoint, orient, point_in_convex, segment_meets_convex, Containment,
+    Orientation,
 };
 
 /// The object id of a terrain blocker (it belongs to no object).
@@ -530,17 +539,95 @@ impl Terrain {
         out
     }
 
+    /// The least terrain height over the convex polygon `poly` (counter-clockwise, at least 3
+    /// vertices), a lower bound less [`HEIGHT_MARGIN_M`]: every triangle whose box meets the
+    /// polygon's is clipped to it (floating point, one half-plane per edge) and gives the least
+    /// height of its plane over the clipped polygon's vertices; a triangle that the exact test
+    /// finds meeting the polygon's interior, yet whose clipped polygon came out empty, or a
+    /// triangle steeper than [`STEEP`], gives its lowest vertex. `None` when no triangle meets
+    /// it. Says nothing of whether the terrain covers it. (The module header, "Joins".)
+    pub fn least_over(&self, poly: &[DVec2]) -> Option<f64> {
+        let (lo, hi) = crate::bake::bounds(poly);
+        let mut ids = Vec::new();
+        self.index.query(lo, hi, &mut ids);
+        let n = poly.len();
+        let mut m = f64::INFINITY;
+        let mut clipped: Vec<DVec2> = Vec::new();
+        let mut next: Vec<DVec2> = Vec::new();
+        for &i in &ids {
+            let t = &self.triangles[i as usize];
+            let (b0, b1) = tri_box(t);
+            if b0.x > hi.x || b0.y > hi.y || b1.x < lo.x || b1.y < lo.y {
+                continue;
+            }
+            let (g, c) = plane(t);
+            let lowest = t[0].z.min(t[1].z).min(t[2].z);
+            if !(g.length() <= STEEP) {
+                m = m.min(lowest);
+                continue;
+            }
+            clipped.clear();
+            clipped.extend(t.iter().map(|p| p.truncate()));
+            for k in 0..n {
+                let (u, v) = (poly[k], poly[(k + 1) % n]);
+                let side = |x: DVec2| (v - u).perp_dot(x - u);
+                next.clear();
+                for j in 0..clipped.len() {
+                    let (a, b) = (clipped[j], clipped[(j + 1) % clipped.len()]);
+                    let (sa, sb) = (side(a), side(b));
+                    match (sa >= 0.0, sb >= 0.0) {
+                        (true, true) => next.push(b),
+                        (true, false) => next.push(a + (b - a) * (sa / (sa - sb))),
+                        (false, true) => {
+                            next.push(a + (b - a) * (sa / (sa - sb)));
+                            next.push(b);
+                        }
+                        (false, false) => {}
+                    }
+                }
+                std::mem::swap(&mut clipped, &mut next);
+                if clipped.is_empty() {
+                    break;
+                }
+            }
+            if clipped.is_empty() {
+                let tri = [t[0].truncate(), t[1].truncate(), t[2].truncate()];
+                if !convex_interiors_disjoint(&tri, poly) {
+                    m = m.min(lowest);
+                }
+                continue;
+            }
+            for p in &clipped {
+                m = m.min(g.dot(*p) + c);
+            }
+        }
+        m.is_finite().then_some(m - HEIGHT_MARGIN_M)
+    }
+
+    /// [`Self::solid_top`] over a blocker's footprint: over its polygon itself when it has an
+    /// area ([`Self::least_over`]; its box must still be covered), over its box for a wall.
+    pub fn solid_top_under(&self, poly: &[DVec2]) -> Option<f64> {
+        let (lo, hi) = crate::bake::bounds(poly);
+        if poly.len() < 3 {
+            return self.solid_top(lo, hi);
+        }
+        if !self.covers(lo, hi) {
+            return None;
+        }
+        let m = self.least_over(poly)?;
+        Some((m / HEIGHT_STEP_M).floor() * HEIGHT_STEP_M)
+    }
+
     /// Joins building blockers with the solid ground under them (module header): lowers to the
-    /// floor the base of every blocker whose box the terrain covers with a least height at or
-    /// above its base. Returns how many were joined.
+    /// floor the base of every blocker whose box the terrain covers with a least height, over
+    /// the blocker's own polygon, at or above its base. Returns how many were joined.
     pub fn join(&mut self, blockers: &mut [Blocker]) -> usize {
         let mut n = 0;
         for b in blockers.iter_mut() {
-            let (lo, hi) = crate::bake::bounds(&b.polygon);
             if b.base <= self.floor || b.top <= b.base {
                 continue;
             }
-            if let Some(m) = self.solid_top(lo, hi) {
+            if let Some(m) = self.solid_top_under(&b.polygon) {
                 if m >= b.base {
                     b.base = self.floor;
                     n += 1;
@@ -658,6 +745,73 @@ mod tests {
         assert!(!t.covers(DVec2::new(35.0, 5.0), DVec2::new(35.0, 60.0)));
         // A flat terrain merges into few squares.
         assert!(t.blockers.len() < 30, "{}", t.blockers.len());
+    }
+
+    /// The least height over a polygon bounds the terrain from below at every point of it
+    /// (sampled against the triangles themselves), and is close to the least sampled height.
+    #[test]
+    fn least_over_a_polygon_lies_under_the_terrain_in_it() {
+        let f = |x: f64, y: f64| 10.0 + 0.3 * x + 3.0 * (y / 17.0).sin() + 0.01 * x * y;
+        let t = Terrain::new(Vec::new(), grid(12, 10.0, f, None)).unwrap();
+        let mut r = crate::testutil::Lcg(11);
+        for _ in 0..60 {
+            // A rotated rectangle (counter-clockwise) inside the grid.
+            let c = DVec2::new(20.0 + 80.0 * r.next(), 20.0 + 80.0 * r.next());
+            let (w, h, a) = (2.0 + 15.0 * r.next(), 2.0 + 15.0 * r.next(), 6.3 * r.next());
+            let (u, v) = (DVec2::new(a.cos(), a.sin()), DVec2::new(-a.sin(), a.cos()));
+            let poly: Vec<DVec2> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .iter()
+                .map(|&(i, j)| c + u * (i * w * 0.5) + v * (j * h * 0.5))
+                .collect();
+            let m = t.least_over(&poly).unwrap();
+            let mut least = f64::INFINITY;
+            for _ in 0..300 {
+                let (i, j) = (r.next(), r.next());
+                let p = poly[0] + (poly[1] - poly[0]) * i + (poly[3] - poly[0]) * j;
+                let z = height(&t, p).unwrap();
+                assert!(m <= z, "least {m} above the terrain {z} at {p:?}");
+                least = least.min(z);
+            }
+            // Corners included: the least lies at a vertex of some clipped triangle.
+            for p in &poly {
+                least = least.min(height(&t, *p).unwrap());
+            }
+            assert!(least - m < 0.5, "least {m}, sampled {least}");
+            // Never above the box's least either (the box holds the polygon).
+            let (lo, hi) = crate::bake::bounds(&poly);
+            assert!(t.range(lo, hi).unwrap().0 <= m + 1e-9);
+        }
+    }
+
+    /// On a slope, a building set into it whose base is its lowest ground: its box's low corner
+    /// lies off the building and below the base, so only the least over its own polygon joins
+    /// it. A building standing above its ground at some point of it is not joined.
+    #[test]
+    fn a_rotated_building_on_a_slope_joins_over_its_polygon_not_its_box() {
+        let mut t =
+            Terrain::new(Vec::new(), grid(10, 10.0, |x, y| 0.5 * x + 0.5 * y, None)).unwrap();
+        // A square turned 45 degrees about (50, 50): corners (50, 40), (60, 50), (50, 60),
+        // (40, 50); its least terrain height is 45 at (50, 40) and (40, 50), its box's 40.
+        let poly = vec![
+            DVec2::new(50.0, 40.0),
+            DVec2::new(60.0, 50.0),
+            DVec2::new(50.0, 60.0),
+            DVec2::new(40.0, 50.0),
+        ];
+        let (lo, hi) = crate::bake::bounds(&poly);
+        assert!(t.solid_top(lo, hi).unwrap() < 40.01);
+        let top = t.solid_top_under(&poly).unwrap();
+        assert!((44.9..=45.0).contains(&top), "{top}");
+        let b = |base: f64| Blocker {
+            object: 0,
+            polygon: poly.clone(),
+            base,
+            top: base + 8.0,
+        };
+        let mut bs = vec![b(44.5), b(45.5)];
+        assert_eq!(t.join(&mut bs), 1);
+        assert_eq!(bs[0].base, t.floor);
+        assert_eq!(bs[1].base, 45.5);
     }
 
     #[test]
