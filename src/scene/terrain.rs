@@ -409,19 +409,25 @@ impl Terrain {
         (2.0 * self.area / self.triangles.len().max(1) as f64).sqrt()
     }
 
+    /// The triangles whose boxes meet the closed rectangle `[lo, hi]`, in the index's order.
+    fn meeting_box(&self, lo: DVec2, hi: DVec2) -> Vec<&[DVec3; 3]> {
+        let mut ids = Vec::new();
+        self.index.query(lo, hi, &mut ids);
+        ids.iter()
+            .map(|&i| &self.triangles[i as usize])
+            .filter(|t| {
+                let (b0, b1) = tri_box(t);
+                !(b0.x > hi.x || b0.y > hi.y || b1.x < lo.x || b1.y < lo.y)
+            })
+            .collect()
+    }
+
     /// The least and greatest terrain height over the closed rectangle `[lo, hi]`, over the
     /// triangles that meet it (a lower and an upper bound, [`HEIGHT_MARGIN_M`] outward); `None`
     /// when no triangle meets it. Says nothing of whether the terrain covers the rectangle.
     pub fn range(&self, lo: DVec2, hi: DVec2) -> Option<(f64, f64)> {
-        let mut ids = Vec::new();
-        self.index.query(lo, hi, &mut ids);
         let (mut m, mut big) = (f64::INFINITY, f64::NEG_INFINITY);
-        for &i in &ids {
-            let t = &self.triangles[i as usize];
-            let (b0, b1) = tri_box(t);
-            if b0.x > hi.x || b0.y > hi.y || b1.x < lo.x || b1.y < lo.y {
-                continue;
-            }
+        for t in self.meeting_box(lo, hi) {
             let (g, c) = plane(t);
             let poly = clip(t, lo, hi);
             if poly.is_empty() {
@@ -548,18 +554,11 @@ impl Terrain {
     /// it. Says nothing of whether the terrain covers it. (The module header, "Joins".)
     pub fn least_over(&self, poly: &[DVec2]) -> Option<f64> {
         let (lo, hi) = crate::bake::bounds(poly);
-        let mut ids = Vec::new();
-        self.index.query(lo, hi, &mut ids);
         let n = poly.len();
         let mut m = f64::INFINITY;
         let mut clipped: Vec<DVec2> = Vec::new();
         let mut next: Vec<DVec2> = Vec::new();
-        for &i in &ids {
-            let t = &self.triangles[i as usize];
-            let (b0, b1) = tri_box(t);
-            if b0.x > hi.x || b0.y > hi.y || b1.x < lo.x || b1.y < lo.y {
-                continue;
-            }
+        for t in self.meeting_box(lo, hi) {
             let (g, c) = plane(t);
             let lowest = t[0].z.min(t[1].z).min(t[2].z);
             if !(g.length() <= STEEP) {
