@@ -307,6 +307,38 @@ pub fn fan_triangles(m: &super::Mesh) -> Vec<[DVec3; 3]> {
     out
 }
 
+/// The xy of triangle `t` clipped to the convex counter-clockwise polygon `poly`, one
+/// half-plane per edge, into `out` (`scratch` is a buffer reused between the steps), in
+/// floating point: empty when rounding leaves nothing (the caller checks that case exactly).
+fn clip_convex(t: &[DVec3; 3], poly: &[DVec2], out: &mut Vec<DVec2>, scratch: &mut Vec<DVec2>) {
+    out.clear();
+    out.extend(t.iter().map(|p| p.truncate()));
+    let n = poly.len();
+    for k in 0..n {
+        let (u, v) = (poly[k], poly[(k + 1) % n]);
+        let side = |x: DVec2| (v - u).perp_dot(x - u);
+        scratch.clear();
+        for j in 0..out.len() {
+            let (a, b) = (out[j], out[(j + 1) % out.len()]);
+            let (sa, sb) = (side(a), side(b));
+            let cut = || a + (b - a) * (sa / (sa - sb));
+            match (sa >= 0.0, sb >= 0.0) {
+                (true, true) => scratch.push(b),
+                (true, false) => scratch.push(cut()),
+                (false, true) => {
+                    scratch.push(cut());
+                    scratch.push(b);
+                }
+                (false, false) => {}
+            }
+        }
+        std::mem::swap(out, scratch);
+        if out.is_empty() {
+            return;
+        }
+    }
+}
+
 /// Smallest power of two (times 1 m) at least `x`.
 fn pow2_at_least(x: f64) -> f64 {
     let mut s = 1.0f64 / 64.0;
@@ -554,7 +586,6 @@ impl Terrain {
     /// it. Says nothing of whether the terrain covers it. (The module header, "Joins".)
     pub fn least_over(&self, poly: &[DVec2]) -> Option<f64> {
         let (lo, hi) = crate::bake::bounds(poly);
-        let n = poly.len();
         let mut m = f64::INFINITY;
         let mut clipped: Vec<DVec2> = Vec::new();
         let mut next: Vec<DVec2> = Vec::new();
@@ -565,30 +596,7 @@ impl Terrain {
                 m = m.min(lowest);
                 continue;
             }
-            clipped.clear();
-            clipped.extend(t.iter().map(|p| p.truncate()));
-            for k in 0..n {
-                let (u, v) = (poly[k], poly[(k + 1) % n]);
-                let side = |x: DVec2| (v - u).perp_dot(x - u);
-                next.clear();
-                for j in 0..clipped.len() {
-                    let (a, b) = (clipped[j], clipped[(j + 1) % clipped.len()]);
-                    let (sa, sb) = (side(a), side(b));
-                    match (sa >= 0.0, sb >= 0.0) {
-                        (true, true) => next.push(b),
-                        (true, false) => next.push(a + (b - a) * (sa / (sa - sb))),
-                        (false, true) => {
-                            next.push(a + (b - a) * (sa / (sa - sb)));
-                            next.push(b);
-                        }
-                        (false, false) => {}
-                    }
-                }
-                std::mem::swap(&mut clipped, &mut next);
-                if clipped.is_empty() {
-                    break;
-                }
-            }
+            clip_convex(t, poly, &mut clipped, &mut next);
             if clipped.is_empty() {
                 let tri = [t[0].truncate(), t[1].truncate(), t[2].truncate()];
                 if !convex_interiors_disjoint(&tri, poly) {

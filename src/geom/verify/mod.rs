@@ -53,20 +53,21 @@
 //! ## The search: a sweep along the segment
 //! Parameters along `s` are dyadic, `t = j / 2^30`, and a point is used only when `a + t (b - a)`
 //! is exactly representable (checked), so it lies exactly on `s` and consecutive pieces tile `s`
-//! with no gap. Such points are dense only when `a` and `b` have few significant bits: callers
-//! put ends on the VO grid (2^-10 m, ARCHITECTURE.md invariant 8); with full-mantissa ends the
-//! first exact point after `a` may lie halfway along, and the sweep certifies little. From the current point `q` (first `a`) a certificate is read off at `q` and a
-//! probe point a little ahead (the tangent vertices of each blocker near them, then a
-//! chain of overlapping chords that covers the cell's angle, greedily (from the arc that covers the
-//! cell's first tangent, each time the arc reaching farthest), joining
-//! blockers that share a vertex through it), checked exactly at both. Every condition is affine
-//! along `s`, so where the certificate stops holding is estimated in floating point from its
-//! values at `q` and `b`; the estimate is rounded down to a dyadic point and the certificate is
-//! checked exactly there (binary search back towards the probe when rounding made it fail). By
-//! Lemma 2 the piece between is hidden; the sweep goes on from its end. A piece whose two ends lie
-//! in one blocker lies in it (blockers are convex), and is hidden. Where no certificate is found,
-//! the sweep steps on, doubling its step from [`MIN_PIECE_M`], and the skipped part counts as
-//! visible: the output can only be smaller than the true hidden set, never larger.
+//! with no gap. Such points are dense only when `a` and `b` have few significant bits: callers put
+//! ends on the VO grid (2^-10 m, ARCHITECTURE.md invariant 8); with full-mantissa ends the first
+//! exact point after `a` may lie halfway along, and the sweep certifies little. From the current
+//! point `q` (first `a`) a certificate is read off at `q` and a probe point a little ahead (the
+//! tangent vertices of each blocker near them, then a chain of overlapping chords that covers the
+//! cell's angle, greedily (from the arc that covers the cell's first tangent, each time the arc
+//! reaching farthest), joining blockers that share a vertex through it), checked exactly at both.
+//! Every condition is affine along `s`, so where the certificate stops holding is estimated in
+//! floating point from its values at `q` and `b`; the estimate is rounded down to a dyadic point
+//! and the certificate is checked exactly there (binary search back towards the probe when rounding
+//! made it fail). By Lemma 2 the piece between is hidden; the sweep goes on from its end. A piece
+//! whose two ends lie in one blocker lies in it (blockers are convex), and is hidden. Where no
+//! certificate is found, the sweep steps on, doubling its step from [`MIN_PIECE_M`], and the
+//! skipped part counts as visible: the output can only be smaller than the true hidden set, never
+//! larger.
 //! **Leaving a blocker.** Where the segment leaves a blocker `X` into the open, the certificate
 //! beyond needs `X` as a link, whose (A) fails inside `X`; so a piece `[q, p]` with `q` in `X`
 //! is accepted when a certificate holds at its anchor `m` and at `p`, `[q, m]` meets the chord
