@@ -562,24 +562,40 @@ impl EdgeTwins {
             let n = if p.len() >= 3 { p.len() } else { 0 };
             (0..n).map(move |i| (p[i], p[(i + 1) % n]))
         }
+        // Every edge as (its key, its polygon), sorted; and every edge's reverse as (that key,
+        // the edge's index), sorted: one merge of the two finds each edge's twins, a run of
+        // `keys` (the same polygons in the same order a search of `keys` per edge would find,
+        // without a random access into a list of millions per edge).
         let mut keys: Vec<((u64, u64, u64, u64), u32)> = Vec::new();
-        for (i, p) in polys.iter().enumerate() {
-            keys.extend(edges(p.as_ref()).map(|(u, v)| (key(u, v), i as u32)));
-        }
-        keys.sort_unstable();
+        let mut reversed: Vec<((u64, u64, u64, u64), u32)> = Vec::new();
         let mut first_edge = Vec::with_capacity(polys.len() + 1);
-        let mut twin_start = vec![0u32];
-        let mut twins = Vec::new();
-        for p in polys {
-            first_edge.push(twin_start.len() as u32 - 1);
+        for (i, p) in polys.iter().enumerate() {
+            first_edge.push(reversed.len() as u32);
             for (u, v) in edges(p.as_ref()) {
-                let k = key(v, u);
-                let at = keys.partition_point(|x| x.0 < k);
-                twins.extend(keys[at..].iter().take_while(|x| x.0 == k).map(|x| x.1));
-                twin_start.push(twins.len() as u32);
+                keys.push((key(u, v), i as u32));
+                reversed.push((key(v, u), reversed.len() as u32));
             }
         }
-        first_edge.push(twin_start.len() as u32 - 1);
+        first_edge.push(reversed.len() as u32);
+        keys.sort_unstable();
+        reversed.sort_unstable();
+        // Per edge, the run of `keys` holding its reverse.
+        let mut run = vec![(0u32, 0u32); reversed.len()];
+        let mut at = 0usize;
+        for &(k, e) in &reversed {
+            while at < keys.len() && keys[at].0 < k {
+                at += 1;
+            }
+            let end = at + keys[at..].iter().take_while(|x| x.0 == k).count();
+            run[e as usize] = (at as u32, end as u32);
+        }
+        let mut twin_start = Vec::with_capacity(run.len() + 1);
+        twin_start.push(0u32);
+        let mut twins = Vec::new();
+        for &(s, e) in &run {
+            twins.extend(keys[s as usize..e as usize].iter().map(|x| x.1));
+            twin_start.push(twins.len() as u32);
+        }
         EdgeTwins {
             first_edge,
             twin_start,
