@@ -125,10 +125,18 @@ impl Grid {
     /// Calls `f` once for each box listed in a bucket meeting `[lo, hi]` that `keep` accepts
     /// (buckets by their bounds), in bucket order; `seen` (one stamp per box) marks those
     /// already met, with `stamp`, which must differ from every earlier query's.
+    ///
+    /// `region`, when it has 3 or more vertices, is a convex polygon whose bounding box is
+    /// `[lo, hi]` and which holds every bucket `keep` accepts up to a margin far below
+    /// [`ROW_PAD_M`]: in each row of buckets only those meeting the region's part in that row,
+    /// grown by the pad, are offered to `keep` (the others it would refuse), so a thin region
+    /// across a wide box costs its own area, not the box's.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn query(
         &self,
         lo: DVec2,
         hi: DVec2,
+        region: &[DVec2],
         keep: &dyn Fn(DVec2, DVec2) -> bool,
         seen: &mut [u32],
         stamp: u32,
@@ -139,7 +147,23 @@ impl Grid {
         }
         let (x0, y0, x1, y1) = self.range(lo, hi);
         for y in y0..=y1 {
-            for x in x0..=x1 {
+            let (xa, xb) = if region.len() >= 3 {
+                let band0 = self.lo.y + y as f64 * self.size - ROW_PAD_M;
+                let band1 = self.lo.y + (y + 1) as f64 * self.size + ROW_PAD_M;
+                match row_extent(region, band0, band1) {
+                    Some((a, b)) => {
+                        let (a, _, b, _) = self.range(
+                            DVec2::new(a - ROW_PAD_M, lo.y),
+                            DVec2::new(b + ROW_PAD_M, lo.y),
+                        );
+                        (a.max(x0), b.min(x1))
+                    }
+                    None => continue,
+                }
+            } else {
+                (x0, x1)
+            };
+            for x in xa..=xb {
                 let b0 = self.lo + DVec2::new(x as f64, y as f64) * self.size;
                 if !keep(b0, b0 + DVec2::splat(self.size)) {
                     continue;
@@ -154,6 +178,31 @@ impl Grid {
             }
         }
     }
+}
+
+/// How far [`Grid::query`] grows a region's part in a row of buckets, metres: far above the
+/// margin of the verifier's half-plane filter and the rounding of the row's edge crossings.
+const ROW_PAD_M: f64 = 1.0;
+
+/// The least and greatest x of the convex polygon `p` within the band `y0 <= y <= y1`: over its
+/// vertices in the band and its edges' crossings of the band's two lines (float, for
+/// [`Grid::query`], which pads it); `None` when the band misses it.
+fn row_extent(p: &[DVec2], y0: f64, y1: f64) -> Option<(f64, f64)> {
+    let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
+    let n = p.len();
+    for i in 0..n {
+        let (u, w) = (p[i], p[(i + 1) % n]);
+        if u.y >= y0 && u.y <= y1 {
+            (a, b) = (a.min(u.x), b.max(u.x));
+        }
+        for yl in [y0, y1] {
+            if (u.y - yl) * (w.y - yl) < 0.0 {
+                let x = u.x + (yl - u.y) * (w.x - u.x) / (w.y - u.y);
+                (a, b) = (a.min(x), b.max(x));
+            }
+        }
+    }
+    (a <= b).then_some((a, b))
 }
 
 /// Blockers indexed for the verifier: their boxes and a bucket grid over them. One index can
@@ -255,9 +304,14 @@ impl<'a> Verifier<'a> {
             *stamp = 0;
         }
         *stamp += 1;
-        self.index()
-            .grid
-            .query(lo, hi, &|bl, bh| !clear(bl, bh), stamps, *stamp, |i| {
+        self.index().grid.query(
+            lo,
+            hi,
+            &hull,
+            &|bl, bh| !clear(bl, bh),
+            stamps,
+            *stamp,
+            |i| {
                 if !self.member(i) {
                     return;
                 }
@@ -265,7 +319,8 @@ impl<'a> Verifier<'a> {
                 if !(bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y || clear(bl, bh)) {
                     out.push(i);
                 }
-            });
+            },
+        );
     }
 
     /// [`Self::near`] of the piece `[j, k]`, from the cache when it covers the piece; otherwise
@@ -393,7 +448,7 @@ mod tests {
             let lo = v(g.range(-50.0, spread), g.range(-50.0, spread));
             let hi = lo + v(g.range(0.0, 200.0), g.range(0.0, 200.0));
             let mut got = Vec::new();
-            grid.query(lo, hi, &|_, _| true, &mut seen, 1, |i| got.push(i));
+            grid.query(lo, hi, &[], &|_, _| true, &mut seen, 1, |i| got.push(i));
             let mut sorted = got.clone();
             sorted.sort_unstable();
             sorted.dedup();
