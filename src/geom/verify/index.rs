@@ -274,28 +274,7 @@ impl<'a> Verifier<'a> {
     pub(super) fn near(&self, a: DVec2, b: DVec2, out: &mut Vec<u32>) {
         let hull = convex_hull(self.cell.iter().copied().chain([a, b]));
         let (lo, hi) = bbox(&hull);
-        // Each hull edge as an outward half-plane `n . x > c + m`: a box wholly beyond one,
-        // by the margin, holds no point of the hull (rounding of this float test only keeps
-        // a blocker more, or drops one that at most touches the hull).
-        let planes: Vec<(DVec2, f64)> = if hull.len() < 3 {
-            Vec::new()
-        } else {
-            (0..hull.len())
-                .map(|i| {
-                    let (u, v) = (hull[i], hull[(i + 1) % hull.len()]);
-                    let n = (v - u).perp() * -1.0;
-                    let m = 1e-9 * (n.length() + 1.0) * (1.0 + u.abs().max_element());
-                    (n, n.dot(u) + m)
-                })
-                .collect()
-        };
-        let clear = |bl: DVec2, bh: DVec2| {
-            planes.iter().any(|&(n, c)| {
-                let x = if n.x >= 0.0 { bl.x } else { bh.x };
-                let y = if n.y >= 0.0 { bl.y } else { bh.y };
-                n.x * x + n.y * y > c
-            })
-        };
+        let clear = clear_of(&hull);
         out.clear();
         let mut seen = self.seen.borrow_mut();
         let (stamps, stamp) = &mut *seen;
@@ -386,6 +365,33 @@ impl<'a> Verifier<'a> {
     }
 }
 
+/// The float filter of [`Verifier::near`]: `clear(lo, hi)` is true when the box `[lo, hi]` lies
+/// wholly beyond one edge of the convex polygon `hull` (counter-clockwise) by a margin, so holds
+/// none of its points (rounding only keeps a box more, or drops one that at most touches it).
+/// Always false for fewer than 3 vertices.
+fn clear_of(hull: &[DVec2]) -> impl Fn(DVec2, DVec2) -> bool {
+    // Each hull edge as an outward half-plane `n . x > c + m`.
+    let planes: Vec<(DVec2, f64)> = if hull.len() < 3 {
+        Vec::new()
+    } else {
+        (0..hull.len())
+            .map(|i| {
+                let (u, v) = (hull[i], hull[(i + 1) % hull.len()]);
+                let n = (v - u).perp() * -1.0;
+                let m = 1e-9 * (n.length() + 1.0) * (1.0 + u.abs().max_element());
+                (n, n.dot(u) + m)
+            })
+            .collect()
+    };
+    move |bl: DVec2, bh: DVec2| {
+        planes.iter().any(|&(n, c)| {
+            let x = if n.x >= 0.0 { bl.x } else { bh.x };
+            let y = if n.y >= 0.0 { bl.y } else { bh.y };
+            n.x * x + n.y * y > c
+        })
+    }
+}
+
 /// Convex hull, counter-clockwise, without collinear points (Andrew's monotone chain with exact
 /// orientation tests).
 pub(super) fn convex_hull(pts: impl Iterator<Item = DVec2>) -> Vec<DVec2> {
@@ -462,6 +468,51 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The rows a region offers change nothing: a query with the cell-to-stretch hull lists
+    /// the same boxes in the same order as one over its whole bounding box.
+    #[test]
+    fn a_query_by_rows_of_the_hull_lists_what_the_whole_box_lists() {
+        let mut g = Lcg(31);
+        let mut listed = 0;
+        for round in 0..300 {
+            let n = 1 + (g.next_u64() % 200) as usize;
+            let spread = if round % 2 == 0 { 300.0 } else { 3000.0 };
+            let boxes: Vec<(DVec2, DVec2)> = (0..n)
+                .map(|_| {
+                    let lo = v(g.range(0.0, spread), g.range(0.0, spread));
+                    (lo, lo + v(g.range(0.0, 60.0), g.range(0.0, 60.0)))
+                })
+                .collect();
+            let grid = Grid::new(&boxes);
+            // A cell and a far stretch: a thin hull across a wide box.
+            let c = v(g.range(0.0, spread), g.range(0.0, spread));
+            let s = g.range(1.0, 100.0);
+            let a = v(
+                g.range(-200.0, spread + 200.0),
+                g.range(-200.0, spread + 200.0),
+            );
+            let b = a + v(g.range(-60.0, 60.0), g.range(-60.0, 60.0));
+            let pts = [c, c + v(s, 0.0), c + v(s, s), c + v(0.0, s), a, b];
+            let hull = convex_hull(pts.iter().copied());
+            let (lo, hi) = bbox(&hull);
+            let clear = clear_of(&hull);
+            let mut seen = vec![0u32; n];
+            let (mut whole, mut rows) = (Vec::new(), Vec::new());
+            grid.query(lo, hi, &[], &|l, h| !clear(l, h), &mut seen, 1, |i| {
+                whole.push(i)
+            });
+            grid.query(lo, hi, &hull, &|l, h| !clear(l, h), &mut seen, 2, |i| {
+                rows.push(i)
+            });
+            assert_eq!(whole, rows, "round {round}");
+            listed += whole.len();
+        }
+        assert!(
+            listed > 1000,
+            "the queries listed too little to compare: {listed}"
+        );
     }
 
     /// Every blocker that some segment from the cell to the piece meets is near it.
