@@ -192,14 +192,14 @@ pub fn parse_range(s: &str) -> Result<(f64, f64), String> {
     Ok((parse_num(a)?, parse_num(b)?))
 }
 
-/// Parses `auto` or a slice count 1 to 5.
+/// Parses `auto` or a slice count 1 to 8.
 pub fn parse_slices(s: &str) -> Result<Slices, String> {
     if s == "auto" {
         return Ok(Slices::Auto);
     }
     match s.parse::<u8>() {
-        Ok(n @ 1..=5) => Ok(Slices::Fixed(n)),
-        _ => Err(format!("expected `auto` or 1 to 5, got {s:?}")),
+        Ok(n @ 1..=8) => Ok(Slices::Fixed(n)),
+        _ => Err(format!("expected `auto` or 1 to 8, got {s:?}")),
     }
 }
 

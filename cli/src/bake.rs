@@ -50,7 +50,7 @@ pub struct BakeArgs {
     /// Eye heights above the ground, metres: LOW..HIGH.
     #[arg(long, default_value = "1.5..2.0", value_parser = parse_eye, value_name = "LOW..HIGH", allow_hyphen_values = true)]
     pub eye: (f64, f64),
-    /// Slices per cell: `auto` (up to 5) or 1 to 5.
+    /// Slices per cell (heights at which VOs are sought): `auto` (up to 5; up to 8 where the blockers around the cell stand under 12 m above the eyes, low-rise) or 1 to 8.
     #[arg(long, default_value = "auto", value_parser = parse_slices)]
     pub slices: Slices,
     /// Most VOs per cell (1 to 10).

@@ -16,7 +16,7 @@ use glam::DVec2;
 
 use super::params::Slices;
 use super::plan::{CellStats, Plan};
-use super::slice::{area_angle, choose_levels, Support};
+use super::slice::{area_angle, auto_slices, choose_levels, Support};
 use super::{bounds, BlockerSet};
 use crate::geom::predicates::{convex_interiors_disjoint, point_in_convex, Containment};
 use crate::runtime::format::CellRecord;
@@ -163,7 +163,7 @@ impl CellSetup {
             .collect();
         let levels: Vec<f64> = (0..HEIGHT_LEVELS).map(|k| f.vo_top(e1, k)).collect();
         let n = match plan.params.slices {
-            Slices::Auto => 5,
+            Slices::Auto => auto_slices(&adjusted, e1),
             Slices::Fixed(n) => n as usize,
         };
         let slices = choose_levels(&levels, &adjusted, n);

@@ -32,9 +32,10 @@ pub const MAX_FAR_BLOCK_M: f64 = 10_000.0;
 /// How many slices a cell gets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Slices {
-    /// Up to 5, fewer when the heights around the cell do not spread over 5 levels.
+    /// Up to 5, or up to 8 where the cell's blockers stand low ([`super::slice::auto_slices`]);
+    /// fewer when the heights around the cell do not spread over that many levels.
     Auto,
-    /// Up to this many (1 to 5), fewer when levels coincide.
+    /// Up to this many (1 to [`super::slice::MAX_SLICES`]), fewer when levels coincide.
     Fixed(u8),
 }
 

@@ -57,7 +57,7 @@ pub enum BakeError {
     MaxVos(usize),
     #[error("--bytes-per-cell must be a positive number of bytes, got {0}")]
     BytesPerCell(f64),
-    #[error("--slices must be 1..=5, got {0}")]
+    #[error("--slices must be 1..={max}, got {0}", max = super::slice::MAX_SLICES)]
     Slices(u8),
     #[error("--reach must be {min} to {max} m, got {0}", min = super::params::MIN_REACH_M, max = super::params::MAX_REACH_M)]
     Reach(f64),
@@ -178,7 +178,7 @@ impl<'s> Plan<'s> {
             return Err(BakeError::BytesPerCell(params.bytes_per_cell));
         }
         if let Slices::Fixed(n) = params.slices {
-            if n == 0 || n > 5 {
+            if n == 0 || n as usize > super::slice::MAX_SLICES {
                 return Err(BakeError::Slices(n));
             }
         }

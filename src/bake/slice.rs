@@ -220,6 +220,51 @@ impl Support {
     }
 }
 
+/// Slices a cell gets with `--slices auto` where its blockers stand tall ([`auto_slices`]).
+pub const AUTO_SLICES: usize = 5;
+/// Slices a cell gets with `--slices auto` where its blockers stand low ([`auto_slices`]), and
+/// the most any cell gets (the hidden maps are built 8 slices at a time).
+pub const MAX_SLICES: usize = 8;
+/// Below this weighted median height of its blockers above the top eye, metres (about four
+/// storeys), a cell is low-rise and gets [`MAX_SLICES`] slices with `--slices auto`.
+pub const LOW_RISE_M: f64 = 12.0;
+
+/// How many slices `--slices auto` gives a cell whose blockers are `adjusted` (the slice
+/// histogram's (adjusted height, weight) pairs, [`Support::adjusted_height`]) with top eye
+/// `e1`: [`MAX_SLICES`] when the weighted median of `height - e1` over the blockers that stand
+/// above the eyes is below [`LOW_RISE_M`], else [`AUTO_SLICES`].
+///
+/// Why: where blockers stand only a few metres above the eyes, what a VO hides changes sharply
+/// with its top (rule 3 lets an occludee rise `(h - e1) dl / d_line` above it), and five
+/// quantile slices are too coarse there: 8 slices took Den Haag (every cell) from 22.2% to
+/// 23.6% culled and Salt River with its DEM (20 cells) from 5.5% to 7.5%. Among tall blockers
+/// the extra slices add little (Tokyo centre, every cell: 90.0% against 89.9%) for 5 to 8% more
+/// bake time. Which slices are baked decides nothing about safety: every VO is certified.
+pub fn auto_slices(adjusted: &[(f64, f64)], e1: f64) -> usize {
+    let mut above: Vec<(f64, f64)> = adjusted
+        .iter()
+        .filter(|&&(h, w)| h > e1 && w > 0.0)
+        .map(|&(h, w)| (h - e1, w))
+        .collect();
+    let total: f64 = above.iter().map(|x| x.1).sum();
+    if !(total > 0.0) {
+        return AUTO_SLICES;
+    }
+    above.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut acc = 0.0;
+    for &(h, w) in &above {
+        acc += w;
+        if acc >= 0.5 * total {
+            return if h < LOW_RISE_M {
+                MAX_SLICES
+            } else {
+                AUTO_SLICES
+            };
+        }
+    }
+    AUTO_SLICES
+}
+
 /// Picks up to `n` slice levels among `levels` (ascending VO tops, level index = position) from
 /// blockers given as (adjusted height, weight): the level at which the weight of blockers still
 /// tall enough falls to each of the fractions `1 - (i + 1/2) / n` of the total. Levels come out
@@ -504,5 +549,37 @@ mod tests {
         assert_eq!(choose_levels(&levels, &b, 1), vec![4]);
         assert_eq!(choose_levels(&levels, &b, 2), vec![2, 4]);
         assert_eq!(choose_levels(&levels, &[], 3), Vec::<u8>::new());
+    }
+
+    #[test]
+    fn low_rise_cells_get_eight_slices_and_tall_ones_five() {
+        let e1 = 10.0;
+        // Houses 4 m above the eyes, weighted alike: low-rise.
+        let houses: Vec<(f64, f64)> = (0..20).map(|i| (e1 + 3.0 + 0.1 * i as f64, 1.0)).collect();
+        assert_eq!(auto_slices(&houses, e1), MAX_SLICES);
+        // Towers 40 m above: tall.
+        let towers: Vec<(f64, f64)> = (0..20).map(|i| (e1 + 40.0 + i as f64, 1.0)).collect();
+        assert_eq!(auto_slices(&towers, e1), AUTO_SLICES);
+        // The weights decide, not the count: three heavy towers among twenty light houses.
+        let mut mixed = houses.clone();
+        mixed.extend((0..3).map(|i| (e1 + 30.0 + i as f64, 10.0)));
+        assert_eq!(auto_slices(&mixed, e1), AUTO_SLICES);
+        // Blockers not above the eyes (adjusted height 0) count for nothing.
+        let mut low = towers.clone();
+        low.extend((0..100).map(|_| (0.0, 5.0)));
+        assert_eq!(auto_slices(&low, e1), AUTO_SLICES);
+        // Just under and at the threshold.
+        assert_eq!(
+            auto_slices(&[(e1 + LOW_RISE_M - 0.01, 1.0)], e1),
+            MAX_SLICES
+        );
+        assert_eq!(auto_slices(&[(e1 + LOW_RISE_M, 1.0)], e1), AUTO_SLICES);
+        // No blocker at all: the default.
+        assert_eq!(auto_slices(&[], e1), AUTO_SLICES);
+        // And choose_levels gives the low-rise cell more distinct levels with it.
+        let levels: Vec<f64> = (0..32).map(|k| e1 + 0.25 * k as f64).collect();
+        let five = choose_levels(&levels, &houses, AUTO_SLICES);
+        let eight = choose_levels(&levels, &houses, MAX_SLICES);
+        assert!(eight.len() > five.len(), "{five:?} {eight:?}");
     }
 }
