@@ -433,7 +433,7 @@ fn bake_refuses_bad_options_and_pvs_bad_stores() {
         (vec!["--cell-size", "0"], "cell size"),
         (vec!["--max-vos", "11"], "--max-vos"),
         (vec!["--eye", "2..1"], "eye heights"),
-        (vec!["--slices", "6"], "--slices"),
+        (vec!["--slices", "9"], "--slices"),
     ] {
         let mut a = vec!["bake", LYON, "--height-attr", "HAUTEUR", "-o", s];
         a.extend(args);
