@@ -437,18 +437,23 @@ mod tests {
     use crate::geom::predicates::segment_meets_convex;
     use crate::testutil::Lcg;
 
+    /// `n` boxes with corners in `[0, spread]^2` and sides up to `side`.
+    fn random_boxes(g: &mut Lcg, n: usize, spread: f64, side: f64) -> Vec<(DVec2, DVec2)> {
+        (0..n)
+            .map(|_| {
+                let lo = v(g.range(0.0, spread), g.range(0.0, spread));
+                (lo, lo + v(g.range(0.0, side), g.range(0.0, side)))
+            })
+            .collect()
+    }
+
     #[test]
     fn the_grid_lists_each_box_meeting_a_query_once() {
         let mut g = Lcg(23);
         for round in 0..200 {
             let n = 1 + (g.next_u64() % 60) as usize;
             let spread = if round % 2 == 0 { 100.0 } else { 3000.0 };
-            let boxes: Vec<(DVec2, DVec2)> = (0..n)
-                .map(|_| {
-                    let lo = v(g.range(0.0, spread), g.range(0.0, spread));
-                    (lo, lo + v(g.range(0.0, 80.0), g.range(0.0, 80.0)))
-                })
-                .collect();
+            let boxes = random_boxes(&mut g, n, spread, 80.0);
             let grid = Grid::new(&boxes);
             let mut seen = vec![0u32; n];
             let lo = v(g.range(-50.0, spread), g.range(-50.0, spread));
@@ -479,12 +484,7 @@ mod tests {
         for round in 0..300 {
             let n = 1 + (g.next_u64() % 200) as usize;
             let spread = if round % 2 == 0 { 300.0 } else { 3000.0 };
-            let boxes: Vec<(DVec2, DVec2)> = (0..n)
-                .map(|_| {
-                    let lo = v(g.range(0.0, spread), g.range(0.0, spread));
-                    (lo, lo + v(g.range(0.0, 60.0), g.range(0.0, 60.0)))
-                })
-                .collect();
+            let boxes = random_boxes(&mut g, n, spread, 60.0);
             let grid = Grid::new(&boxes);
             // A cell and a far stretch: a thin hull across a wide box.
             let c = v(g.range(0.0, spread), g.range(0.0, spread));
