@@ -126,11 +126,11 @@ impl Grid {
     /// (buckets by their bounds), in bucket order; `seen` (one stamp per box) marks those
     /// already met, with `stamp`, which must differ from every earlier query's.
     ///
-    /// `region`, when it has 3 or more vertices, is a convex polygon whose bounding box is
-    /// `[lo, hi]` and which holds every bucket `keep` accepts up to a margin far below
-    /// [`ROW_PAD_M`]: in each row of buckets only those meeting the region's part in that row,
-    /// grown by the pad, are offered to `keep` (the others it would refuse), so a thin region
-    /// across a wide box costs its own area, not the box's.
+    /// `region`, when it has 3 or more vertices, is a convex polygon that every bucket `keep`
+    /// accepts meets, up to a margin far below [`ROW_PAD_M`]: in each row of buckets only those
+    /// meeting the region's part in that row, grown by the pad, are offered to `keep` (the
+    /// others it would refuse), so a thin region across a wide box costs its own area, not the
+    /// box's.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn query(
         &self,
