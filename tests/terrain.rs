@@ -219,7 +219,7 @@ fn bake_summary_tells_how_far_the_ground_rises_across_the_cells() {
 /// A steep hillside written to files: an OBJ terrain on a 10 m grid (a slope rising 110 m
 /// over 600 m, a hill, a ravine, a 25 m cliff a few metres wide, a 45% ramp, ripples) and
 /// GeoJSON footprints with `height` and `base_z` (each reaching 0.5 m into the slope below its
-/// lowest corner, its roof some metres above its highest). Deterministic (splitmix64).
+/// lowest corner, its roof some metres above its highest). Deterministic ([`common::uniform`]).
 fn steep_hillside(dir: &std::path::Path) -> Scene {
     let (w, h) = (700.0f64, 600.0f64);
     let (x0, y0) = (300_000.0, 6_200_000.0);
@@ -253,14 +253,7 @@ fn steep_hillside(dir: &std::path::Path) -> Scene {
             );
         }
     }
-    let mut state = 0x5eed_u64;
-    let mut rnd = move || {
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut v = state;
-        v = (v ^ (v >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        v = (v ^ (v >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((v ^ (v >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = common::uniform(0x5eed);
     let mut placed: Vec<(f64, f64, f64)> = Vec::new();
     let mut features = Vec::new();
     while features.len() < 120 {

@@ -33,6 +33,18 @@ pub fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// Uniform numbers in `[0, 1)` from a seed: splitmix64, the top 53 bits of each state.
+pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut v = state;
+        v = (v ^ (v >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        v = (v ^ (v >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((v ^ (v >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 use glam::DVec2;
 use vocc::geom::predicates::{
     orient, point_in_convex, segment_meets_convex, Containment, Orientation,
