@@ -281,7 +281,7 @@ fn steep_hillside(dir: &std::path::Path) -> Scene {
         let (lo, hi) = zs
             .iter()
             .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
-        let storeys = [4.0, 6.0, 7.0, 9.0, 12.0, 15.0, 20.0, 30.0][(rnd() * 8.0) as usize % 8];
+        let above = [4.0, 6.0, 7.0, 9.0, 12.0, 15.0, 20.0, 30.0][(rnd() * 8.0) as usize % 8];
         let ring: Vec<String> = pts
             .iter()
             .chain(std::iter::once(&pts[0]))
@@ -289,7 +289,7 @@ fn steep_hillside(dir: &std::path::Path) -> Scene {
             .collect();
         features.push(format!(
             r#"{{"type":"Feature","properties":{{"height":{:.2},"base_z":{:.2}}},"geometry":{{"type":"Polygon","coordinates":[[{}]]}}}}"#,
-            storeys + 2.0 * rnd() + (hi - lo) + 0.5,
+            above + 2.0 * rnd() + (hi - lo) + 0.5,
             lo - 0.5,
             ring.join(",")
         ));
