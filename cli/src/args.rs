@@ -9,6 +9,7 @@ use clap::error::ErrorKind;
 use clap::Args;
 
 use vocc::bake::params::{Effort, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
+use vocc::bake::slice::MAX_SLICES;
 use vocc::runtime::frame::MAX_VOS_PER_CELL;
 use vocc::scene::{OnBadHeight, ReadOptions};
 
@@ -192,14 +193,14 @@ pub fn parse_range(s: &str) -> Result<(f64, f64), String> {
     Ok((parse_num(a)?, parse_num(b)?))
 }
 
-/// Parses `auto` or a slice count 1 to 8.
+/// Parses `auto` or a slice count 1 to [`MAX_SLICES`].
 pub fn parse_slices(s: &str) -> Result<Slices, String> {
     if s == "auto" {
         return Ok(Slices::Auto);
     }
     match s.parse::<u8>() {
-        Ok(n @ 1..=8) => Ok(Slices::Fixed(n)),
-        _ => Err(format!("expected `auto` or 1 to 8, got {s:?}")),
+        Ok(n) if n >= 1 && n as usize <= MAX_SLICES => Ok(Slices::Fixed(n)),
+        _ => Err(format!("expected `auto` or 1 to {MAX_SLICES}, got {s:?}")),
     }
 }
 
