@@ -11,7 +11,7 @@
 //! (ARCHITECTURE.md invariant 13).
 
 use super::spans::{Costs, Spans};
-use crate::runtime::culler::BoxTree;
+use crate::runtime::culler::{BoxTree, Coarse};
 use crate::runtime::frame::{CellView, VoGeom};
 use crate::runtime::occlusion::PreparedVo;
 
@@ -20,6 +20,13 @@ use crate::runtime::occlusion::PreparedVo;
 /// 2 km away on the edge of an umbra, 20 m across, weighs nothing rather than being walked box
 /// by box. It only lowers weights, and decides nothing.
 pub const WEIGH_MIN_ANGLE: f64 = 0.01;
+/// Beyond this distance from the cell's centre, metres (past a cell's own reach and its block's
+/// far field), subtrees partly hidden are passed over below [`WEIGH_FAR_MIN_ANGLE`] instead:
+/// there the edges of a VO's umbra are kilometres long, and walking them at the near angle was
+/// most of the weighing's cost in a city 25 km wide (docs/SCALING.md), for weights that chose the
+/// same VOs as well. A city narrower than this is weighed as before.
+pub const WEIGH_FAR_M: f64 = 3000.0;
+pub const WEIGH_FAR_MIN_ANGLE: f64 = 0.05;
 
 /// The occludees of a scene: boxes in the local frame, with costs, under the runtime's box
 /// hierarchy. Occludees are named by their position in the hierarchy (each subtree a
@@ -30,9 +37,9 @@ pub struct Occludees {
     pub cost: Vec<u64>,
     /// The same costs as prefix sums.
     pub costs: Costs,
-    /// Subtrees partly hidden that look smaller than this from the cell, radians, are passed
-    /// over whole when weighing (`BoxTree::hidden_runs`): 0 weighs exactly.
-    pub min_angle: f64,
+    /// Which subtrees partly hidden are passed over whole when weighing
+    /// (`BoxTree::hidden_runs`): [`Coarse::EXACT`] weighs exactly.
+    pub(crate) coarse: Coarse,
     tree: BoxTree,
 }
 
@@ -46,7 +53,11 @@ impl Occludees {
             boxes: by_pos.map(|i| boxes[i]).collect(),
             costs: Costs::new(&cost),
             cost,
-            min_angle: WEIGH_MIN_ANGLE,
+            coarse: Coarse {
+                angle: WEIGH_MIN_ANGLE,
+                far_m: WEIGH_FAR_M,
+                far_angle: WEIGH_FAR_MIN_ANGLE,
+            },
             tree,
         }
     }
@@ -104,7 +115,7 @@ impl Occludees {
             &p,
             [cx - radius, cy - radius, cx + radius, cy + radius],
             &self.boxes,
-            self.min_angle,
+            self.coarse,
             found,
         );
     }

@@ -277,6 +277,67 @@ fn bvh_equals_the_box_by_box_rule_on_random_scenes() {
     assert!(tot.boxes_tested < n, "{tot:?} of {n}");
 }
 
+/// The bake's weighing walk ([`BoxTree::hidden_runs`]): exact, it finds the boxes rule 3 hides
+/// box by box; coarse ([`Coarse`]), it finds a subset of them that holds every hidden box
+/// nearer the cell's centre than `far_m` when only far subtrees are passed over.
+#[test]
+fn hidden_runs_find_the_hidden_boxes_and_pass_over_only_far_subtrees() {
+    let f = frame();
+    let mut r = Lcg(0x5eed_0009);
+    let (mut hidden, mut passed_over) = (0, 0);
+    for scene in 0..40 {
+        let (rec, mut boxes) = random_scene(&mut r, 100 + scene * 40);
+        boxes.retain(|b| box_is_valid(b));
+        let tree = BoxTree::new(&boxes);
+        let by_pos: Vec<[f64; 6]> = (0..tree.positions() as u32)
+            .map(|p| boxes[tree.id_at(p) as usize])
+            .collect();
+        let ground = rec.ground();
+        let view = f.cell_view(12, ground).unwrap();
+        let within = [-1e4, -1e4, 1e4, 1e4];
+        let runs = |vo: &PreparedVo, coarse: Coarse| {
+            let mut out = Vec::new();
+            tree.hidden_runs(&view, vo, within, &by_pos, coarse, |s, e, _| {
+                out.extend(s..e)
+            });
+            out
+        };
+        for q in rec.vos() {
+            let vo = PreparedVo::new(&view, &f.dequantize(12, ground, q).unwrap());
+            let exact = runs(&vo, Coarse::EXACT);
+            let by_box: Vec<u32> = (0..by_pos.len() as u32)
+                .filter(|&p| vo.cover(&view, &by_pos[p as usize]) == Cover::Hidden)
+                .collect();
+            assert_eq!(exact, by_box, "scene {scene}");
+            let far_m = 120.0;
+            let coarse = Coarse {
+                angle: 0.0,
+                far_m,
+                far_angle: 0.5,
+            };
+            let some = runs(&vo, coarse);
+            assert!(some.iter().all(|p| exact.binary_search(p).is_ok()));
+            let dist = |b: &[f64; 6]| {
+                let dx = (b[0] - 250.0).max(250.0 - b[3]).max(0.0);
+                let dy = (b[1] - 250.0).max(250.0 - b[4]).max(0.0);
+                dx.hypot(dy)
+            };
+            for &p in &exact {
+                if dist(&by_pos[p as usize]) <= far_m {
+                    assert!(some.binary_search(&p).is_ok(), "scene {scene}, box {p}");
+                }
+            }
+            hidden += exact.len();
+            passed_over += exact.len() - some.len();
+        }
+    }
+    // Both kinds of walk did work: boxes hidden, and some of them passed over.
+    assert!(
+        hidden > 1000 && passed_over > 50,
+        "{hidden} hidden, {passed_over} passed over"
+    );
+}
+
 /// Most levels of nodes over `n` boxes. Every split leaves at most 90% of a node's boxes
 /// on each side ([`MIN_SIDE`]; the median split too, above [`LEAF_SIZE`]), and only the
 /// first [`BINNED_LEVELS`] binary levels split by cost; each level of nodes takes two binary

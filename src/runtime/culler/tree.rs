@@ -496,11 +496,11 @@ impl BoxTree {
     /// [`Self::id_at`]`(p)`): the leaves keep their grown form only ([`Lanes`]), and whether a
     /// box meets `within` is asked of the box itself.
     ///
-    /// A subtree that is only partly hidden and looks smaller than `min_angle` (its bounds' larger
-    /// side over their distance from the cell's centre, radians) is passed over whole: far away,
-    /// on the edge of an umbra, where a walk would otherwise visit box after box for little
-    /// weight. So the runs found are a subset of the hidden boxes, and exactly them at
-    /// `min_angle = 0`.
+    /// A subtree that is only partly hidden and looks small ([`Coarse::small`]: its bounds'
+    /// larger side over their distance from the cell's centre, radians) is passed over whole:
+    /// far away, on the edge of an umbra, where a walk would otherwise visit box after box for
+    /// little weight. So the runs found are a subset of the hidden boxes, and exactly them with
+    /// [`Coarse::EXACT`].
     ///
     /// # Panics
     /// When `boxes` does not hold one box per position ([`Self::positions`]).
@@ -510,7 +510,7 @@ impl BoxTree {
         vo: &PreparedVo,
         within: [f64; 4],
         boxes: &[[f64; 6]],
-        min_angle: f64,
+        coarse: Coarse,
         mut found: impl FnMut(u32, u32, &[f64; 6]),
     ) {
         let r = view.rect;
@@ -519,7 +519,7 @@ impl BoxTree {
             let size = (b[3] - b[0]).max(b[4] - b[1]);
             let dx = (b[0] - cx).max(cx - b[3]).max(0.0);
             let dy = (b[1] - cy).max(cy - b[4]).max(0.0);
-            size < min_angle * dx.hypot(dy)
+            coarse.small(size, dx.hypot(dy))
         };
         assert_eq!(boxes.len(), self.positions(), "one box per tree position");
         let meets = |b: &[f64; 6]| {
@@ -569,5 +569,37 @@ impl BoxTree {
                 sp += 1;
             }
         }
+    }
+}
+
+/// How coarsely [`BoxTree::hidden_runs`] walks the edge of an umbra: a subtree only partly
+/// hidden is passed over whole when it looks smaller than `angle` from the cell's centre
+/// (its bounds' larger side over their distance, radians), or smaller than `far_angle` once
+/// it lies more than `far_m` metres away.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Coarse {
+    pub angle: f64,
+    pub far_m: f64,
+    pub far_angle: f64,
+}
+
+impl Coarse {
+    /// Every hidden box found, none passed over.
+    #[cfg(test)]
+    pub const EXACT: Coarse = Coarse {
+        angle: 0.0,
+        far_m: f64::INFINITY,
+        far_angle: 0.0,
+    };
+
+    /// Whether a subtree `size` metres across, `dist` metres from the cell's centre, is passed
+    /// over when it is only partly hidden.
+    pub fn small(&self, size: f64, dist: f64) -> bool {
+        let angle = if dist > self.far_m {
+            self.far_angle
+        } else {
+            self.angle
+        };
+        size < angle * dist
     }
 }
