@@ -287,7 +287,7 @@ fn hidden_runs_find_the_hidden_boxes_and_pass_over_only_far_subtrees() {
     let (mut hidden, mut passed_over) = (0, 0);
     for scene in 0..40 {
         let (rec, mut boxes) = random_scene(&mut r, 100 + scene * 40);
-        boxes.retain(|b| box_is_valid(b));
+        boxes.retain(box_is_valid);
         let tree = BoxTree::new(&boxes);
         let by_pos: Vec<[f64; 6]> = (0..tree.positions() as u32)
             .map(|p| boxes[tree.id_at(p) as usize])
