@@ -170,11 +170,21 @@ impl Support {
             return false;
         }
         let lambda = lambda.min(1.0);
+        self.base_holds(e0, g, lambda) && self.top_holds(e1, h, lambda)
+    }
+
+    /// The lower half of [`Self::holds`], for `lambda` in `[0, 1]`: it does not depend on the
+    /// VO's top.
+    fn base_holds(&self, e0: f64, g: f64, lambda: f64) -> bool {
         let low = e0 - lambda * (e0 - g).max(0.0);
-        let high = e1 + lambda * (h - e1).max(0.0);
         // `b <= min(e0, g)` compares given values, with no arithmetic: exact.
-        (self.base <= e0.min(g) || self.base <= low - RULE2_SLACK_M * (1.0 + low.abs()))
-            && self.top >= high + RULE2_SLACK_M * (1.0 + high.abs())
+        self.base <= e0.min(g) || self.base <= low - RULE2_SLACK_M * (1.0 + low.abs())
+    }
+
+    /// The upper half of [`Self::holds`], for `lambda` in `[0, 1]`.
+    fn top_holds(&self, e1: f64, h: f64, lambda: f64) -> bool {
+        let high = e1 + lambda * (h - e1).max(0.0);
+        self.top >= high + RULE2_SLACK_M * (1.0 + high.abs())
     }
 
     /// Rule 2: this blocker supports a VO of top `h`, bottom `g`, at least `d_near_s` from the
@@ -201,13 +211,57 @@ impl Support {
         d_bs: f64,
         line: f64,
     ) -> bool {
+        self.lambda_beside(d_near_s, d_bs, line)
+            .is_some_and(|lambda| self.holds(e0, e1, g, h, lambda))
+    }
+
+    /// The bound on `lambda` of [`Self::supports_beside`] (before its cap of 1), `None` when
+    /// the distances refuse every VO.
+    fn lambda_beside(&self, d_near_s: f64, d_bs: f64, line: f64) -> Option<f64> {
         if !(d_near_s > 0.0) || !(d_bs >= 0.0) {
-            return false;
+            return None;
         }
-        let lambda = (self.d_far / d_near_s)
-            .min(self.d_far / (self.d_far + d_bs))
-            .min(line);
-        self.holds(e0, e1, g, h, lambda)
+        Some(
+            (self.d_far / d_near_s)
+                .min(self.d_far / (self.d_far + d_bs))
+                .min(line),
+        )
+    }
+
+    /// An estimate of the greatest VO top `h` for which [`Self::supports_beside`] holds with
+    /// these arguments: minus infinity when it holds for none (the distances refuse, or the
+    /// blocker's base stands too high: neither depends on `h`); else rule 2's upper bound `top >=
+    /// high + RULE2_SLACK_M (1 + |high|)`, with `high = e1 + lambda (h - e1)`, solved for `h`
+    /// (infinite when `lambda` is 0 and it holds). An estimate only, rounded either way: a caller
+    /// checks the answer with `supports_beside` itself ([`super::certify`]'s `levels_beside`
+    /// checks the level it points to and the next).
+    pub fn top_beside_estimate(
+        &self,
+        e0: f64,
+        e1: f64,
+        g: f64,
+        d_near_s: f64,
+        d_bs: f64,
+        line: f64,
+    ) -> f64 {
+        let Some(lambda) = self.lambda_beside(d_near_s, d_bs, line) else {
+            return f64::NEG_INFINITY;
+        };
+        if !(lambda >= 0.0) {
+            return f64::NEG_INFINITY;
+        }
+        let lambda = lambda.min(1.0);
+        if !self.base_holds(e0, g, lambda) {
+            return f64::NEG_INFINITY;
+        }
+        let high = (self.top - RULE2_SLACK_M) / (1.0 + RULE2_SLACK_M);
+        if lambda > 0.0 {
+            e1 + (high - e1) / lambda
+        } else if self.top_holds(e1, e1, 0.0) {
+            f64::INFINITY
+        } else {
+            f64::NEG_INFINITY
+        }
     }
 
     /// The height this blocker ranks by in the slice histogram: the VO top it supports where
