@@ -2,7 +2,8 @@
 //! changed scene rebakes only the cells whose neighbourhood changed.
 //!
 //! Input: a [`Plan`] (scene, options, frame) and the cells it bakes.
-//! Output: [`CellHashes`]: one hash of everything global (vocc version, options, frame) and one
+//! Output: [`CellHashes`]: one hash of everything global (the code: vocc version and source
+//! fingerprint, [`CODE`]; options, frame) and one
 //! hash per cell (0 for a cell this bake leaves empty); their file form (the `.hashes` file beside
 //! a store, [`CellHashes::encode`]); and, against an older bake's hashes, the cells to rebake
 //! ([`CellHashes::changed`]).
@@ -279,13 +280,23 @@ impl Mix {
     }
 }
 
+/// The code that bakes, as the global hash takes it: the package version and the fingerprint of
+/// the library's sources (`build.rs`), so that hashes written by another build, even of the same
+/// version, never let `--reuse` copy a record this build would bake differently.
+pub const CODE: &str = concat!(env!("CARGO_PKG_VERSION"), "+", env!("VOCC_SOURCE_HASH"));
+
 impl CellHashes {
     /// The hashes of `cells` (ascending ids) under `plan`; every other cell gets 0.
     pub fn new(plan: &Plan, cells: &[CellId]) -> CellHashes {
+        Self::by_code(plan, cells, CODE)
+    }
+
+    /// [`Self::new`] as the build named `code` (its [`CODE`]) would write them.
+    fn by_code(plan: &Plan, cells: &[CellId], code: &str) -> CellHashes {
         use rayon::prelude::*;
         let scene = plan.scene();
         let mut g = Mix::new(1);
-        g.bytes(env!("CARGO_PKG_VERSION").as_bytes());
+        g.bytes(code.as_bytes());
         // Every option but the cell selection (region, walkable area), which the zero hash of an
         // unbaked cell records.
         g.bytes(options_key(plan.params()).as_bytes());
@@ -633,6 +644,27 @@ mod tests {
             first_cell_hash(&row, None, true),
             first_cell_hash(&swapped(10, 12), None, true),
             "order within the block's reach"
+        );
+    }
+
+    /// Regression (`--reuse` trusted hashes written by any build of the same version, so a
+    /// store rebaked after the bake code changed could mix records of two builds): the global
+    /// hash takes the sources' fingerprint, so another build rebakes every cell.
+    #[test]
+    fn hashes_of_another_build_of_the_same_version_differ_globally() {
+        let (digits, version) = (&CODE[CODE.len() - 16..], env!("CARGO_PKG_VERSION"));
+        assert!(digits.bytes().all(|b| b.is_ascii_hexdigit()), "{CODE}");
+        assert_eq!(CODE, format!("{version}+{digits}"));
+        let scene = crate::testutil::squares(&[([0.0, 0.0, 20.0], 0.0, 10.0)]);
+        let plan = Plan::new(&scene, BakeParams::default()).unwrap();
+        let cells: Vec<CellId> = (0..plan.frame.grid.cell_count() as CellId).collect();
+        let ours = CellHashes::new(&plan, &cells);
+        let other = CellHashes::by_code(&plan, &cells, &format!("{version}+{:016x}", 1));
+        assert_ne!(ours.global, other.global);
+        assert_eq!(
+            ours.changed(&other, &cells),
+            cells,
+            "another build rebakes every cell"
         );
     }
 

@@ -76,7 +76,7 @@ pub enum ReuseRefusal {
     OtherStore,
     /// The grid, origin, eyes, ground range or quantization changed.
     FrameChanged,
-    /// The options or the vocc version changed.
+    /// The options changed, or the old store was baked by another vocc (version or build).
     OptionsChanged,
 }
 
@@ -88,7 +88,9 @@ impl std::fmt::Display for ReuseRefusal {
             ReuseRefusal::FrameChanged => {
                 "the grid, origin, eyes, ground range or quantization changed"
             }
-            ReuseRefusal::OptionsChanged => "the options or the vocc version changed",
+            ReuseRefusal::OptionsChanged => {
+                "the options changed, or another vocc (version or build) baked the old store"
+            }
         })
     }
 }
