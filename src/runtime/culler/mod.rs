@@ -45,6 +45,7 @@ use crate::runtime::occlusion::{Cover, GroupProbe, Lanes, PreparedVo, ALL_PLANES
 mod tests;
 mod tree;
 
+#[cfg(feature = "bake")]
 pub(crate) use tree::Coarse;
 use tree::STACK;
 pub use tree::{BoxTree, MAX_BOXES};
