@@ -461,13 +461,7 @@ mod tests {
     /// is taken, not only correct).
     #[test]
     fn highest_level_by_the_estimate_is_the_scans() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |lo: f64, hi: f64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            lo + (hi - lo) * (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::testutil::uniform(7);
         let (mut by_estimate, mut supported, n) = (0usize, 0usize, 300_000);
         for _ in 0..n {
             let e0 = next(0.5, 80.0);
