@@ -57,8 +57,9 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 10, value_parser = parse_max_vos)]
     pub max_vos: usize,
     /// The store's budget, bytes per cell on average with every byte counted (header, index,
-    /// records), or `none`. Each cell keeps at most the VOs that fit its share: 8 on a large
-    /// grid, 7 with per-cell ground and rise bytes or on a small grid (docs/FORMAT.md, "Sizes")
+    /// records), or `none`. Each cell keeps the VOs that fit its share (8 on a large grid, 7
+    /// with per-cell ground and rise bytes or on a small grid), and what a group of 4 x 4 cells
+    /// leaves goes to its cells' best further VOs, up to --max-vos (docs/FORMAT.md, "Sizes")
     #[arg(long, default_value = "52", value_parser = parse_bytes_per_cell, value_name = "B")]
     pub bytes_per_cell: f64,
     /// Worker threads (default: all cores). The output does not depend on it; more threads
@@ -68,7 +69,8 @@ pub struct BakeArgs {
     /// Bake only the cells meeting this world rectangle X0,Y0,X1,Y1 (the others stay empty).
     #[arg(long, value_parser = parse_rect, allow_hyphen_values = true, value_name = "X0,Y0,X1,Y1")]
     pub region: Option<[f64; 4]>,
-    /// Bake only shard I of N: the cells whose id is I modulo N (`I/N`, 0-based), or `auto`: the
+    /// Bake only shard I of N: the cells whose group of 4 x 4 cells (row-major) is I modulo N
+    /// (`I/N`, 0-based; a group shares its bytes, so it is baked whole), or `auto`: the
     /// array index from Slurm (`SLURM_ARRAY_TASK_ID`, with `SLURM_ARRAY_TASK_COUNT`), a
     /// Kubernetes Indexed Job (`JOB_COMPLETION_INDEX`) or AWS Batch (`AWS_BATCH_JOB_ARRAY_INDEX`),
     /// the count from `--shard-count` when the engine does not give it. `vocc merge` joins the

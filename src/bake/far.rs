@@ -231,7 +231,7 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
     );
     picked
         .into_iter()
-        .map(|p| FarPiece {
+        .map(|(p, _)| FarPiece {
             a: p.a,
             b: p.b,
             bottom,

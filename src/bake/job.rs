@@ -14,8 +14,9 @@
 //!   the thread count, and a reuse bake gives the same bytes as a full bake (reused cells are
 //!   taken only when every global hash and the frame agree, and their cell hash is unchanged;
 //!   `bake::incremental`);
-//! - a shard bakes the selected cells whose id is `index` modulo `count`; the shards of one bake
-//!   merge into the single bake's bytes (`vocc merge`).
+//! - a shard bakes the selected cells whose group of cells (`bake::share`, 4 x 4 cells that
+//!   share their bytes) is `index` modulo `count`; the shards of one bake merge into the single
+//!   bake's bytes (`vocc merge`); a reuse bake bakes again every group with a changed cell.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -31,6 +32,32 @@ use crate::runtime::format::{
 };
 use crate::runtime::grid::CellId;
 use crate::scene::Scene;
+
+/// The cells of `cells` to bake given an older bake's hashes `old`: every cell of a group
+/// ([`super::share::group_of`]) in which some cell of the grid is hashed differently now (a cell
+/// changed, or was selected in one bake and not the other), since a cell's record depends on its
+/// group's; the others' records are the old ones.
+fn whole_groups(plan: &Plan, now: &CellHashes, old: &CellHashes, cells: &[CellId]) -> Vec<CellId> {
+    let changed = now.changed(old, cells);
+    if changed.len() == cells.len() {
+        return changed;
+    }
+    let grid = &plan.frame.grid;
+    let group = |id: CellId| super::share::group_of(grid, id);
+    let mut stale: std::collections::BTreeSet<u64> = changed.iter().map(|&id| group(id)).collect();
+    // A cell of the grid baked before and not now (or the other way) changes its group's share.
+    for id in 0..grid.cell_count() as CellId {
+        let i = id as usize;
+        if now.cells.get(i) != old.cells.get(i) {
+            stale.insert(group(id));
+        }
+    }
+    cells
+        .iter()
+        .copied()
+        .filter(|&id| stale.contains(&group(id)))
+        .collect()
+}
 
 /// Where a bake stands: `done` of `total` cells baked. Reported once with `done == 0` before the
 /// first cell, then as cells finish (in any order, from any worker thread).
@@ -268,7 +295,8 @@ impl<'s> BakeJob<'s> {
         })
     }
 
-    /// Bake only shard `index` of `count`: the selected cells whose id is `index` modulo `count`.
+    /// Bake only shard `index` of `count`: the selected cells whose group
+    /// ([`super::share::group_of`]) is `index` modulo `count`.
     pub fn shard(mut self, index: u32, count: u32) -> Result<BakeJob<'s>, JobError> {
         if count == 0 || index >= count {
             return Err(JobError::Shard { index, count });
@@ -360,7 +388,9 @@ impl<'s> BakeJob<'s> {
             }
         };
         if let Some((i, n)) = self.shard {
-            cells.retain(|id| id % n == i);
+            // By whole groups: a cell's record depends on its group's (bake/share.rs).
+            let grid = &self.plan.frame.grid;
+            cells.retain(|&id| super::share::group_of(grid, id) % n as u64 == i as u64);
         }
         Ok(cells)
     }
@@ -411,7 +441,7 @@ impl<'s> BakeJob<'s> {
                     } else if h.global != hashes.global {
                         Some(ReuseRefusal::OptionsChanged)
                     } else {
-                        to_bake = hashes.changed(&h, &cells);
+                        to_bake = whole_groups(plan, &hashes, &h, &cells);
                         for &id in &cells {
                             if to_bake.binary_search(&id).is_err() {
                                 reused.push((id, old.cell(id).map_err(JobError::OldStore)?));
@@ -537,6 +567,7 @@ pub(crate) fn crs_field(name: &str) -> &str {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bake::share;
     use crate::scene::{gencity, ReadOptions};
 
     /// A generated city of `n` buildings, loaded from its GeoJSON bytes.
@@ -594,7 +625,9 @@ mod tests {
             0 < vos && vos < free_vos,
             "{vos} VOs, {free_vos} without the budget"
         );
-        // Each cell within its own cap (Plan::vo_cap), which the store's sum then respects.
+        // Each group of cells within its allowance (bake/share.rs), which the store's sum then
+        // respects; the bytes a group's cells leave under their own caps (Plan::vo_cap) go to
+        // further VOs of other cells of the group, so some cell stores more than its cap.
         let plan = Plan::new(
             &s,
             BakeParams {
@@ -604,10 +637,26 @@ mod tests {
         )
         .unwrap();
         let st = Store::parse(&out.store).unwrap();
+        let grid = &plan.frame.grid;
+        let mut groups: BTreeMap<u64, (usize, usize)> = BTreeMap::new();
+        let mut over_cap = 0;
         for id in 0..out.summary.grid.cells as CellId {
-            let n = st.cell(id).unwrap().vos().len();
-            assert!(n <= plan.vo_cap(id), "cell {id}: {n} VOs");
+            let rec = st.cell(id).unwrap();
+            let n = rec.vos().len();
+            assert!(n <= plan.params().max_vos, "cell {id}: {n} VOs");
+            over_cap += usize::from(n > plan.vo_cap(id));
+            let g = groups.entry(share::group_of(grid, id)).or_default();
+            g.0 += share::record_bytes(&plan.frame, &rec);
+            g.1 += 1;
         }
+        for (g, (bytes, cells)) in groups {
+            let allowance = plan.cell_allowance() * cells as f64;
+            assert!(
+                bytes as f64 <= allowance,
+                "group {g}: {bytes} bytes over {allowance}"
+            );
+        }
+        assert!(over_cap > 0, "no cell stored more than its own cap");
         // A budget that is no number is refused by name.
         let bad = BakeParams {
             bytes_per_cell: f64::NAN,
@@ -659,12 +708,16 @@ mod tests {
             .iter()
             .enumerate()
             .all(|(k, p)| p.done == k && p.total == total));
-        // Three shards cover the cells once each.
+        // Three shards cover the cells once each, by whole groups of cells (bake/share.rs).
         let mut covered = 0;
+        let grid = BakeJob::new(&s, params()).unwrap().plan.frame.grid;
         for i in 0..3 {
             let sh = BakeJob::new(&s, params()).unwrap().shard(i, 3).unwrap();
             let out = sh.run(&|_| {}).unwrap();
-            assert!(out.cells.iter().all(|c| c.id % 3 == i));
+            assert!(out
+                .cells
+                .iter()
+                .all(|c| share::group_of(&grid, c.id) % 3 == i as u64));
             assert_eq!(out.summary.shard, Some([i, 3]));
             covered += out.summary.cells_baked;
         }

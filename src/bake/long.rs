@@ -130,7 +130,7 @@ pub(super) fn long_vos_traced(
         start,
         &plan.occludees.costs,
         Spans::new(),
-        plan.vo_cap(setup.id),
+        plan.vo_max(setup.id),
         plan.params.budget,
         |c| match &c.value {
             Vo::Piece(p) if c.stage == Stage::Proposed => {
@@ -172,13 +172,14 @@ pub(super) fn long_vos_traced(
             Vo::Stored(..) => Vec::new(),
         },
     );
-    let vos: Vec<(QVo, VoGeom)> = picked
+    let (vos, gains): (Vec<(QVo, VoGeom)>, Vec<u64>) = picked
         .into_iter()
-        .filter_map(|v| match v {
-            Vo::Stored(q, g) => Some((q, g)),
+        .filter_map(|(v, gain)| match v {
+            Vo::Stored(q, g) => Some(((q, g), gain)),
             _ => None,
         })
-        .collect();
+        .unzip();
+    stats.gains = gains;
     stats.stage_ms[4] += clock(&mut t);
     stats.tried = cs.tried;
     stats.raised = cs.raised;

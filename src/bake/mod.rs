@@ -14,7 +14,9 @@
 //! [`hidden`] (per slice, a raster of what the cell's boundary cannot see, sampled), [`propose`]
 //! (the long hidden runs of lines on it), [`certify`] (the exact verifier cuts a proposal into
 //! certified pieces; quantization to 5 bytes, re-checked, then the highest level that still
-//! holds), [`select`] (lazy greedy by occludee cost hidden, certifying only what it picks).
+//! holds), [`select`] (lazy greedy by occludee cost hidden, certifying only what it picks),
+//! [`share`] (the store's bytes shared within groups of 4 x 4 cells: each keeps its cap, the
+//! rest goes to the group's best further picks).
 //! The growth generator, kept as a measured baseline: [`growth`] (aggregate umbrae grown from
 //! single buildings, the dense set, greedy decimation, the picture of one cell's growth).
 //! Invariant: every stored VO passes rule 2 and the exact verifier ([`crate::geom::verify`]) in
@@ -38,6 +40,7 @@ pub mod plan;
 pub mod propose;
 pub mod quantize;
 pub mod select;
+pub mod share;
 pub mod slice;
 pub mod spans;
 pub mod terrain;

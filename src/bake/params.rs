@@ -52,9 +52,10 @@ pub struct BakeParams {
     /// Most VOs stored per cell, a count (1 to [`MAX_VOS_PER_CELL`]). Both generators.
     pub max_vos: usize,
     /// The store's budget, bytes per cell on average with every byte of the store counted
-    /// ([`BYTES_PER_CELL`]; `f64::INFINITY`: none). Each cell keeps at most the VOs that
-    /// [`super::plan::Plan::vo_cap`] allows it, so that the whole store stays within it. Both
-    /// generators.
+    /// ([`BYTES_PER_CELL`]; `f64::INFINITY`: none). Each cell keeps the VOs that
+    /// [`super::plan::Plan::vo_cap`] allows it, and the bytes its group of 4 x 4 cells leaves
+    /// pay for the group's best further VOs ([`super::share`]), so that the whole store stays
+    /// within it. Both generators (only the long one's cells take further VOs).
     pub bytes_per_cell: f64,
     /// Bake only the cells meeting this local rectangle `[x0, y0, x1, y1]`, metres (the grid
     /// still covers the whole scene). Cell selection, both generators; not in the global hash.
@@ -130,7 +131,8 @@ impl Default for FarParams {
 /// (header, scene section, index, block table, records): the budget the format was sized for
 /// (docs/FORMAT.md section 10). A cell's VO cap follows from it ([`super::plan::Plan::vo_cap`]):
 /// 8 VOs on a large grid, 7 on one with per-cell ground and rise bytes or a small grid, and
-/// never more than `max_vos`.
+/// never more than `max_vos`; what a group of cells leaves under its caps goes to its cells'
+/// best further VOs, up to `max_vos` ([`super::share`]).
 pub const BYTES_PER_CELL: f64 = 52.0;
 
 /// Occludees within this distance of a cell's centre (per axis) weigh its VOs, metres: far

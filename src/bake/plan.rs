@@ -119,6 +119,10 @@ pub struct CellStats {
     /// Long only: levels the stored VOs were raised by after quantization (rule 2's tighter
     /// bounds for their own segment).
     pub raised: usize,
+    /// Long only: each stored VO's gain when the cell's greedy picked it (the occludee cost it
+    /// added), in stored order, non-increasing; what [`super::share`] weighs a cell's VOs beyond
+    /// its own cap by. Empty for the growth generator (its cells keep their own cap).
+    pub gains: Vec<u64>,
     /// Time the whole cell took, ms. Both.
     pub ms: f64,
 }
@@ -403,21 +407,15 @@ impl<'s> Plan<'s> {
         ((m - f.ground_z0) / f.ground_step).ceil().clamp(0.0, 255.0) as u8
     }
 
-    /// The most VOs cell `id` may store within the store's budget
-    /// ([`BakeParams::bytes_per_cell`], `B`), and never more than `max_vos`. The store's bytes
-    /// are its fixed part `F` (header, scene section with the CRS name, and the block table's 4
-    /// bytes per 64 cells) and, per cell, 1 index byte, a ground byte when the frame has
-    /// per-cell ground, a rise byte when the cell has a rise, and 6 bytes per VO
-    /// (docs/FORMAT.md sections 5 and 6). Over `N` cells the store is within `B N` bytes when
-    /// every cell is within `B - F / N`: so a cell's cap is `floor((B - F / N - 1 - ground -
-    /// rise) / 6)`. The cap depends on the grid and the cell alone, not on what other cells
-    /// store, so regions, shards and incremental rebakes give the full bake's records. It is at
-    /// least 1: on a grid so small that its header alone exceeds the budget (a few cells), one
-    /// VO a cell still goes in.
-    pub fn vo_cap(&self, id: CellId) -> usize {
+    /// The bytes each cell may take on average within the store's budget
+    /// ([`BakeParams::bytes_per_cell`], `B`): `B - F / N`, where `F` is the store's fixed part
+    /// (header, scene section with the CRS name, and the block table's 4 bytes per 64 cells) and
+    /// `N` the grid's cells. Over `N` cells the store is within `B N` bytes when the cells take
+    /// `N (B - F / N)` at most. Infinite without a budget.
+    pub fn cell_allowance(&self) -> f64 {
         let b = self.params.bytes_per_cell;
         if !b.is_finite() {
-            return self.params.max_vos;
+            return f64::INFINITY;
         }
         let n = self.frame.grid.cell_count().max(1);
         let crs = self
@@ -425,12 +423,36 @@ impl<'s> Plan<'s> {
             .crs()
             .map_or(0, |c| super::job::crs_field(&c.name).len());
         let fixed = crate::runtime::format::store::fixed_len(n, crs) as f64;
-        let n = n as f64;
+        b - fixed / n as f64
+    }
+
+    /// The VOs cell `id` keeps whatever its group does, and never more than `max_vos`: per
+    /// cell, 1 index byte, a ground byte when the frame has per-cell ground, a rise byte when
+    /// the cell has a rise, and 6 bytes per VO (docs/FORMAT.md sections 5 and 6) within
+    /// [`Plan::cell_allowance`], so `floor((B - F / N - 1 - ground - rise) / 6)`. The cap
+    /// depends on the grid and the cell alone. It is at least 1: on a grid so small that its
+    /// header alone exceeds the budget (a few cells), one VO a cell still goes in. What a group
+    /// of cells leaves of its allowance pays for further VOs of its cells ([`super::share`]).
+    pub fn vo_cap(&self, id: CellId) -> usize {
+        let allowance = self.cell_allowance();
+        if !allowance.is_finite() {
+            return self.params.max_vos;
+        }
         let own = 1.0
             + f64::from(u8::from(self.frame.per_cell_ground()))
             + f64::from(u8::from(self.stand(id).rise > 0));
-        let cap = ((b - fixed / n - own) / crate::runtime::format::VO_BYTES as f64).floor();
+        let cap = ((allowance - own) / crate::runtime::format::VO_BYTES as f64).floor();
         (cap.max(1.0) as usize).min(self.params.max_vos)
+    }
+
+    /// The most VOs the cell's own greedy may pick: [`Plan::vo_cap`] for the growth generator;
+    /// for the long generator `max_vos`, of which the group's share of the byte budget keeps
+    /// the cap and the best picks beyond it ([`super::share`]).
+    pub fn vo_max(&self, id: CellId) -> usize {
+        match self.params.generator {
+            Generator::Long => self.params.max_vos,
+            Generator::Growth => self.vo_cap(id),
+        }
     }
 
     /// Where the cell stands: its ground level and, on a terrain, its rise (bake/terrain.rs).
@@ -505,14 +527,16 @@ pub fn bake_cells(
     progress: &(dyn Fn(usize) + Sync),
 ) -> Vec<CellBake> {
     let done = AtomicUsize::new(0);
-    cells
+    let mut baked: Vec<CellBake> = cells
         .par_iter()
         .map(|&id| {
             let r = plan.bake_cell(id);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             r
         })
-        .collect()
+        .collect();
+    super::share::share_bytes(plan, &mut baked);
+    baked
 }
 
 /// The stored record of every cell of the grid, in id order: baked cells from `baked`, the rest

@@ -4,7 +4,8 @@
 //! Input: candidates, each with the occludees it hides on its own (rule 3, the runtime's own
 //! test, so a weight is what the runtime will cull) and the occludees' costs; a `refine` step
 //! that turns a candidate into what it really is one stage later.
-//! Output: the stored candidates in pick order.
+//! Output: the stored candidates in pick order, each with its gain when picked (the cost it
+//! added to what the VOs before it hide: non-increasing along the order).
 //! Rule: lazy greedy by weight. A candidate's weight is the summed cost of the occludees it
 //! hides that no VO picked before hides. The heaviest candidate is popped; if its weight is stale
 //! it goes back with the true one. A fresh candidate that is not yet stored is refined: a
@@ -23,9 +24,9 @@ use super::spans::{Costs, Spans};
 
 /// The long generator's selection stops when the best remaining gain is below this share of the
 /// cost already hidden. The bytes are held by the store's budget (each cell's cap,
-/// `Plan::vo_cap`, 8 VOs on Tokyo's grid), not by this share: under that cap 0.002 stores 7.7 VOs
-/// a cell on Tokyo (47.5 bytes, 90.9% culled on 20 cells), 0.001 7.9 (48.8 bytes, 90.9%), 0.004
-/// 7.1 (43.9 bytes, 90.6%).
+/// `Plan::vo_cap`, 8 VOs on Tokyo's grid, and its group's share, `bake/share.rs`), not by this
+/// share: under the cap alone 0.002 stored 7.7 VOs a cell on Tokyo (47.5 bytes, 90.9% culled on
+/// 20 cells), 0.001 7.9 (48.8 bytes, 90.9%), 0.004 7.1 (43.9 bytes, 90.6%).
 pub const SELECT_MIN_GAIN_SHARE: f64 = 0.002;
 
 /// How far a candidate has come.
@@ -68,7 +69,8 @@ impl PartialOrd for Entry {
 
 /// Lazy greedy selection (module header). `refine(c)` returns what candidate `c` (not yet
 /// stored) becomes one stage later: any number of candidates, each at a later stage. At most
-/// `budget` proposals are refined (certification is what a bake spends most on).
+/// `budget` proposals are refined (certification is what a bake spends most on). Returns the
+/// picks with their gains; the first `k` picks are what `max_vos = k` would give.
 pub fn select<T>(
     candidates: Vec<Candidate<T>>,
     cost: &Costs,
@@ -76,7 +78,7 @@ pub fn select<T>(
     max_vos: usize,
     budget: usize,
     mut refine: impl FnMut(&Candidate<T>) -> Vec<Candidate<T>>,
-) -> Vec<T> {
+) -> Vec<(T, u64)> {
     let mut all: Vec<Option<Candidate<T>>> = Vec::new();
     let mut heap = BinaryHeap::new();
     let push =
@@ -125,7 +127,7 @@ pub fn select<T>(
         if c.stage == Stage::Stored {
             hidden_cost += g;
             covered = covered.union(&c.hidden);
-            out.push(c.value);
+            out.push((c.value, g));
             continue;
         }
         let rs = refine(&c);
@@ -158,13 +160,14 @@ mod tests {
             stored(2, vec![5, 6]),
         ];
         let cost = Costs::new(&[10; 7]);
+        // Gains: 4 x 10, then 2's two new ids, then 1's one new id.
         assert_eq!(
             select(c.clone(), &cost, Spans::new(), 10, 100, |_| vec![]),
-            vec![0, 2, 1]
+            vec![(0, 40), (2, 20), (1, 10)]
         );
         assert_eq!(
             select(c, &cost, Spans::new(), 2, 100, |_| vec![]),
-            vec![0, 2]
+            vec![(0, 40), (2, 20)]
         );
     }
 
@@ -187,7 +190,7 @@ mod tests {
             vec![stored(10, vec![0]), stored(11, vec![3])]
         });
         assert_eq!(refined, 1);
-        assert_eq!(picked, vec![1, 10, 11]);
+        assert_eq!(picked, vec![(1, 2), (10, 1), (11, 1)]);
     }
 
     #[test]
@@ -197,12 +200,12 @@ mod tests {
         let cost = Costs::new(&[1000, 1]);
         assert_eq!(
             select(c.clone(), &cost, Spans::new(), 10, 100, |_| vec![]),
-            vec![0]
+            vec![(0, 1000)]
         );
         let cost = Costs::new(&[1000, 5]);
         assert_eq!(
             select(c, &cost, Spans::new(), 10, 100, |_| vec![]),
-            vec![0, 1]
+            vec![(0, 1000), (1, 5)]
         );
     }
 }
