@@ -106,7 +106,9 @@ pub struct CellStats {
     /// costs. Long: the certified piece at its level (before quantization and raising). Growth:
     /// the dense VO at its chain's level.
     pub unquantized: Vec<VoGeom>,
-    /// Occludee cost hidden by the stored VOs together (rule 3, within [`Plan::reaches`]). Both.
+    /// Occludee cost hidden by the VOs the cell's greedy picked together (rule 3, within
+    /// [`Plan::reaches`]), before its group's share of the bytes cuts them ([`super::share`]).
+    /// Both.
     pub hidden_cost: u64,
     /// Long only: length of the proposals sent to the exact verifier, and of the certified
     /// pieces kept from them, metres (the verifier's completeness).

@@ -6,7 +6,8 @@
 //! proposals as weighed, the pieces the selection certified, the VOs it stored, and the record.
 //! Invariant: observing decides nothing: the record is the one the long generator gives the
 //! cell's setup on its own ground (a deep bake on a terrain, [`Plan::bake_cell`], may keep
-//! another).
+//! another), with all its picks: a bake keeps a prefix of them, what its group's share of the
+//! byte budget allows (`bake/share.rs`).
 
 use glam::DVec2;
 
