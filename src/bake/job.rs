@@ -649,6 +649,11 @@ mod tests {
             g.0 += share::record_bytes(&plan.frame, &rec);
             g.1 += 1;
         }
+        // The records' bytes, as the format counts them, are the store's beside its fixed part
+        // (the generated city has no CRS).
+        let records: usize = groups.values().map(|g| g.0).sum();
+        let fixed = crate::runtime::format::store::fixed_len(out.summary.grid.cells, 0);
+        assert_eq!(fixed as usize + records, out.store.len());
         for (g, (bytes, cells)) in groups {
             let allowance = plan.cell_allowance() * cells as f64;
             assert!(

@@ -40,18 +40,14 @@ pub fn group_of(grid: &GridDescriptor, id: CellId) -> u64 {
     (j / GROUP_SIDE) as u64 * across + (i / GROUP_SIDE) as u64
 }
 
-/// The bytes a record takes in a store of `frame` (docs/FORMAT.md 5.3 and 5.5): its index byte,
-/// and for a cell with VOs its ground byte (when the frame has per-cell ground), its rise byte
-/// (when it has a rise) and 6 bytes per VO.
+/// The bytes a record takes in a store of `frame` (docs/FORMAT.md 5.3 and 5.5,
+/// [`CellRecord::stored_len`]).
 pub fn record_bytes(frame: &Frame, rec: &CellRecord) -> usize {
-    bytes_with(header_bytes(frame, rec), rec.vos().len())
+    rec.stored_len(frame.per_cell_ground()) as usize
 }
 
-/// A record's bytes besides its VOs when it has some: index, ground and rise bytes.
-fn header_bytes(frame: &Frame, rec: &CellRecord) -> usize {
-    1 + usize::from(frame.per_cell_ground()) + usize::from(rec.rise() > 0)
-}
-
+/// A record's bytes with `vos` of its VOs, given its bytes besides the VOs when it has some
+/// (`header`: index, ground and rise bytes): 1 (the index byte alone) without VOs.
 fn bytes_with(header: usize, vos: usize) -> usize {
     if vos == 0 {
         1
@@ -122,9 +118,11 @@ pub fn share_bytes(plan: &Plan, baked: &mut [CellBake]) {
             .iter()
             .map(|&k| {
                 let c = &baked[k];
+                let vos = c.record.vos().len();
                 Member {
-                    vos: c.record.vos().len(),
-                    header: header_bytes(f, &c.record),
+                    vos,
+                    // Its bytes besides the VOs (unused for a cell without VOs).
+                    header: record_bytes(f, &c.record) - VO_BYTES * vos,
                     cap: plan.vo_cap(c.id),
                     gains: &c.stats.gains,
                 }

@@ -177,6 +177,16 @@ impl CellRecord {
             CellRecord::Vos { vos, .. } => vos.len() as u8,
         }
     }
+
+    /// The bytes the record takes in a 2.x store: its index byte, and its payload record
+    /// (section 5.5: a ground byte when `ground_byte`, a rise byte, 6 bytes per VO) when it
+    /// has VOs.
+    pub fn stored_len(&self, ground_byte: bool) -> u64 {
+        match self {
+            CellRecord::Skipped => 1,
+            CellRecord::Vos { .. } => 1 + record_size(self.index_byte(), ground_byte, Version::V2),
+        }
+    }
 }
 
 /// The record a valid index value announces, as the value itself (`0` for none, `1..=10` VOs,
