@@ -203,7 +203,7 @@ pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
         &plan.occludees.costs,
         Spans::new(),
         far.keep,
-        far.budget,
+        far.certifications(setup.near.len()),
         |c| match c.stage {
             Stage::Proposed => certifier
                 .pieces(c.value.level, c.value.a, c.value.b, &mut cs)
