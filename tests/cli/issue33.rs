@@ -371,13 +371,14 @@ fn one_rule_for_output_folders_render_eval_report_gen_city_refuse_a_missing_fold
 }
 
 /// Issue 33, defect 8: `render`'s legend counted only its window without saying so, VO labels
-/// fell off the canvas, and there was no scale bar. Here a 300 m view of a 50 m cell whose VOs
-/// reach its edge (their labels stood at y = 0 and x = 882 of 900).
+/// fell off the canvas, and there was no scale bar. Here 300 m views of 50 m cells whose VOs
+/// reach the view's edge (their labels stood at y = 0 and x = 882 of 900): the cells with the
+/// most VOs, in that order, until one has a VO in its view to label (a corner cell's VOs may
+/// all lie beyond it); every view's text is checked.
 #[test]
 fn render_legend_names_its_window_vo_labels_stay_on_the_canvas_and_a_scale_bar() {
     let dir = common::temp_dir("cli-render-legend");
     let (scene, store) = tiny_scene_and_store(&dir);
-    // The cell with the most VOs.
     let top: serde_json::Value = serde_json::from_slice(
         &vocc(&[
             "inspect",
@@ -386,30 +387,15 @@ fn render_legend_names_its_window_vo_labels_stay_on_the_canvas_and_a_scale_bar()
             "--sort",
             "vos",
             "--top",
-            "1",
+            "8",
             "--json",
         ])
         .stdout,
     )
     .unwrap();
-    let cell = top["cells"][0]["cell"].to_string();
-    assert!(top["cells"][0]["vos"].as_u64().unwrap() >= 3, "{top}");
+    let cells = top["cells"].as_array().unwrap();
+    assert!(cells[0]["vos"].as_u64().unwrap() >= 3, "{top}");
     let svg = dir.join("cell.svg");
-    let (rc, err) = run(&[
-        "render",
-        &store,
-        &scene,
-        "--height-attr",
-        "height",
-        "--cell",
-        &cell,
-        "--radius",
-        "150",
-        "-o",
-        svg.to_str().unwrap(),
-    ]);
-    assert_eq!(rc, Some(0), "{err}");
-    let text = std::fs::read_to_string(&svg).unwrap();
     let attr = |t: &str, name: &str| -> f64 {
         t.split(&format!(" {name}=\""))
             .nth(1)
@@ -420,22 +406,45 @@ fn render_legend_names_its_window_vo_labels_stay_on_the_canvas_and_a_scale_bar()
             .parse()
             .unwrap()
     };
-    let (w, h) = (attr(&text, "width"), attr(&text, "height"));
-    let mut labels = 0;
-    for t in text.split("<text").skip(1) {
-        let (x, y) = (attr(t, "x"), attr(t, "y"));
+    let mut labelled = None;
+    for c in cells.iter().filter(|c| c["vos"].as_u64().unwrap() >= 3) {
+        let cell = c["cell"].to_string();
+        let (rc, err) = run(&[
+            "render",
+            &store,
+            &scene,
+            "--height-attr",
+            "height",
+            "--cell",
+            &cell,
+            "--radius",
+            "150",
+            "-o",
+            svg.to_str().unwrap(),
+        ]);
+        assert_eq!(rc, Some(0), "{err}");
+        let text = std::fs::read_to_string(&svg).unwrap();
+        let (w, h) = (attr(&text, "width"), attr(&text, "height"));
+        let mut labels = 0;
+        for t in text.split("<text").skip(1) {
+            let (x, y) = (attr(t, "x"), attr(t, "y"));
+            assert!(
+                (0.0..=w).contains(&x) && (0.0..=h).contains(&y),
+                "cell {cell}, off the canvas: <text{t}"
+            );
+            let body = t.split('>').nth(1).unwrap().split('<').next().unwrap();
+            labels += usize::from(body.parse::<u32>().is_ok());
+        }
         assert!(
-            (0.0..=w).contains(&x) && (0.0..=h).contains(&y),
-            "off the canvas: <text{t}"
+            text.contains("in this view (300 m square): visible "),
+            "{text}"
         );
-        let body = t.split('>').nth(1).unwrap().split('<').next().unwrap();
-        labels += usize::from(body.parse::<u32>().is_ok());
+        assert!(text.contains("whole scene: PVS "), "{text}");
+        assert!(text.contains(">50 m</text>"), "a scale bar: {text}");
+        if labels > 0 {
+            labelled = Some(cell);
+            break;
+        }
     }
-    assert!(labels > 0, "{text}");
-    assert!(
-        text.contains("in this view (300 m square): visible "),
-        "{text}"
-    );
-    assert!(text.contains("whole scene: PVS "), "{text}");
-    assert!(text.contains(">50 m</text>"), "a scale bar: {text}");
+    assert!(labelled.is_some(), "no view labels a VO: {top}");
 }
