@@ -78,19 +78,6 @@ pub struct HiddenMap {
 }
 
 impl HiddenMap {
-    /// A map of `2 half` metres a side around the origin, `px` metres a pixel, hidden
-    /// everywhere (tests of what reads maps).
-    #[cfg(test)]
-    pub(crate) fn all_hidden(half: f64, px: f64) -> HiddenMap {
-        let n = (2.0 * half / px).round() as usize;
-        HiddenMap {
-            lo: DVec2::splat(-half),
-            px,
-            n,
-            visible: vec![0; (n * n).div_ceil(64)],
-        }
-    }
-
     /// Whether pixel `(ix, iy)` counts as hidden (outside the raster: no).
     #[inline]
     pub fn hidden_px(&self, ix: i64, iy: i64) -> bool {

@@ -179,14 +179,13 @@ pub enum Effort {
 impl Effort {
     /// The parameters of this effort, over `p`.
     pub fn apply(self, p: &mut BakeParams) {
-        let (eyes, per_direction, near, budget, far) = match self {
-            Effort::Fast => (1, 1, 1, 12, 12),
-            Effort::Default => (3, 1, 2, 25, 24),
-            Effort::Tight => (7, 2, 2, 60, 48),
+        let (eyes, per_direction, budget, far) = match self {
+            Effort::Fast => (1, 1, 12, 12),
+            Effort::Default => (3, 1, 25, 24),
+            Effort::Tight => (7, 2, 60, 48),
         };
         p.map.edge_eyes = eyes;
         p.propose.per_direction = per_direction;
-        p.propose.near_per_direction = near;
         p.budget = budget;
         p.far.budget = far;
     }

@@ -35,10 +35,6 @@ pub struct ProposeParams {
     pub min_len: f64,
     /// Runs kept per direction and band of offsets ([`BANDS_M`]), widest umbra first.
     pub per_direction: usize,
-    /// The same in the bands that begin nearer than [`NEAR_BAND_M`] (at least `per_direction`
-    /// counts): the VOs a few hundred metres out, which ring the cell, are where a second run a
-    /// direction pays (README, "How far a cell reaches").
-    pub near_per_direction: usize,
 }
 
 impl Default for ProposeParams {
@@ -50,7 +46,6 @@ impl Default for ProposeParams {
             max_offset: 900.0,
             min_len: 60.0,
             per_direction: 1,
-            near_per_direction: 2,
         }
     }
 }
@@ -85,20 +80,6 @@ pub fn spread(cell: &[DVec2; 4], a: DVec2, b: DVec2) -> f64 {
 
 /// Offsets at which the bands of the scan's ranking begin, metres.
 pub const BANDS_M: [f64; 3] = [200.0, 400.0, 800.0];
-
-/// The bands beginning nearer than this keep [`ProposeParams::near_per_direction`] runs a
-/// direction (the first two: offsets under 400 m).
-pub const NEAR_BAND_M: f64 = 400.0;
-
-/// Runs kept a direction in band `band` (0 nearest; [`BANDS_M`]).
-fn kept_in_band(p: &ProposeParams, band: usize) -> usize {
-    let begins = if band == 0 { 0.0 } else { BANDS_M[band - 1] };
-    if begins < NEAR_BAND_M {
-        p.near_per_direction.max(p.per_direction)
-    } else {
-        p.per_direction
-    }
-}
 
 /// A line of the scan: unit normal `n` (away from the cell centre `c`), offset `o`.
 #[derive(Clone, Copy, Debug)]
@@ -199,7 +180,7 @@ pub fn runs(cell: &[DVec2; 4], map: &HiddenMap, p: &ProposeParams) -> Vec<Propos
         let mut taken = [0usize; BANDS_M.len() + 1];
         for (l, seed) in best {
             let band = BANDS_M.iter().filter(|&&d| l.o >= d).count();
-            if taken[band] < kept_in_band(p, band) {
+            if taken[band] < p.per_direction {
                 taken[band] += 1;
                 out.push(seed);
             }
@@ -226,47 +207,5 @@ mod tests {
         assert!((s - 2.0 * 0.5f64.atan()).abs() < 1e-12, "{s}");
         let short = spread(&cell, DVec2::new(-30.0, 100.0), DVec2::new(30.0, 100.0));
         assert!(short < 0.0);
-    }
-
-    /// The bands under 400 m keep `near_per_direction` runs, the others `per_direction`, and a
-    /// near count below the far one does not thin the near bands.
-    #[test]
-    fn near_bands_keep_their_own_count_of_runs() {
-        let p = ProposeParams::default();
-        let kept: Vec<usize> = (0..=BANDS_M.len()).map(|b| kept_in_band(&p, b)).collect();
-        assert_eq!(kept, [2, 2, 1, 1]);
-        let p = ProposeParams {
-            per_direction: 2,
-            near_per_direction: 1,
-            ..p
-        };
-        let kept: Vec<usize> = (0..=BANDS_M.len()).map(|b| kept_in_band(&p, b)).collect();
-        assert_eq!(kept, [2, 2, 2, 2]);
-    }
-
-    /// On a map hidden everywhere, every line of a direction holds one run; the scan keeps
-    /// `kept_in_band` of them per band, so the near bands give twice the far ones' proposals.
-    #[test]
-    fn a_scan_keeps_two_runs_a_direction_near_and_one_far() {
-        let cell = [
-            DVec2::new(-50.0, -50.0),
-            DVec2::new(50.0, -50.0),
-            DVec2::new(50.0, 50.0),
-            DVec2::new(-50.0, 50.0),
-        ];
-        let map = HiddenMap::all_hidden(1024.0, 4.0);
-        let p = ProposeParams::default();
-        let near = runs(&cell, &map, &p).len();
-        let one = runs(
-            &cell,
-            &map,
-            &ProposeParams {
-                near_per_direction: 1,
-                ..p
-            },
-        )
-        .len();
-        assert_eq!(one, p.directions * (BANDS_M.len() + 1));
-        assert_eq!(near, one + 2 * p.directions);
     }
 }
