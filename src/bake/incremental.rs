@@ -544,8 +544,8 @@ mod tests {
 
     /// The options' text the global hash takes, for the default bake, pinned: a change to it
     /// makes every old `.hashes` file refuse reuse (which a bake then says), so it is made on
-    /// purpose (the far field, issue 31, changed it, then the store's byte budget, then the far field's
-    /// certification budget).
+    /// purpose (the far field, issue 31, changed it, then the store's byte budget, then the far
+    /// field's certification budget).
     #[test]
     fn the_options_key_keeps_its_layout() {
         let p = BakeParams::default();

@@ -125,13 +125,13 @@ impl FarParams {
     /// generated 10^6 city (about 112,000) 13 ms (docs/SCALING.md). The count alone decides,
     /// so a block's pieces stay a function of what it reads.
     pub fn certifications(&self, blockers: usize) -> usize {
-        let floor = self.budget.div_ceil(2);
         if blockers <= self.full_budget_blockers {
             return self.budget;
         }
-        let scaled = (self.budget as u128 * self.full_budget_blockers as u128
-            / blockers.max(1) as u128) as usize;
-        scaled.clamp(floor, self.budget)
+        // `blockers` is above 0 here.
+        let scaled =
+            (self.budget as u128 * self.full_budget_blockers as u128 / blockers as u128) as usize;
+        scaled.clamp(self.budget.div_ceil(2), self.budget)
     }
 }
 

@@ -406,7 +406,7 @@ fn render_legend_names_its_window_vo_labels_stay_on_the_canvas_and_a_scale_bar()
             .parse()
             .unwrap()
     };
-    let mut labelled = None;
+    let mut labelled = false;
     for c in cells.iter().filter(|c| c["vos"].as_u64().unwrap() >= 3) {
         let cell = c["cell"].to_string();
         let (rc, err) = run(&[
@@ -442,9 +442,9 @@ fn render_legend_names_its_window_vo_labels_stay_on_the_canvas_and_a_scale_bar()
         assert!(text.contains("whole scene: PVS "), "{text}");
         assert!(text.contains(">50 m</text>"), "a scale bar: {text}");
         if labels > 0 {
-            labelled = Some(cell);
+            labelled = true;
             break;
         }
     }
-    assert!(labelled.is_some(), "no view labels a VO: {top}");
+    assert!(labelled, "no view labels a VO: {top}");
 }
