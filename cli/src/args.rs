@@ -8,7 +8,7 @@
 use clap::error::ErrorKind;
 use clap::Args;
 
-use vocc::bake::params::{Effort, Generator, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
+use vocc::bake::params::{Effort, Generator, Reach, Slices, MAX_CELL_SIZE_M, MIN_CELL_SIZE_M};
 use vocc::bake::slice::MAX_SLICES;
 use vocc::runtime::frame::MAX_VOS_PER_CELL;
 use vocc::scene::{OnBadHeight, ReadOptions};
@@ -305,14 +305,18 @@ pub fn parse_bytes_per_cell(s: &str) -> Result<f64, String> {
     }
 }
 
-/// Parses `bake --reach`: metres, [`MIN_REACH_M`](vocc::bake::params::MIN_REACH_M) to
+/// Parses `bake --reach`: `auto` (the default: from the scene, `vocc::bake::reach`), or metres
+/// from [`MIN_REACH_M`](vocc::bake::params::MIN_REACH_M) to
 /// [`MAX_REACH_M`](vocc::bake::params::MAX_REACH_M).
-pub fn parse_reach(s: &str) -> Result<f64, String> {
+pub fn parse_reach(s: &str) -> Result<Reach, String> {
     use vocc::bake::params::{MAX_REACH_M, MIN_REACH_M};
+    if s == "auto" {
+        return Ok(Reach::Auto);
+    }
     match s.parse::<f64>() {
-        Ok(m) if (MIN_REACH_M..=MAX_REACH_M).contains(&m) => Ok(m),
+        Ok(m) if (MIN_REACH_M..=MAX_REACH_M).contains(&m) => Ok(Reach::Metres(m)),
         _ => Err(format!(
-            "expected metres from {MIN_REACH_M} to {MAX_REACH_M}, got {s:?}"
+            "expected `auto` or metres from {MIN_REACH_M} to {MAX_REACH_M}, got {s:?}"
         )),
     }
 }

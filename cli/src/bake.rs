@@ -14,7 +14,7 @@ use clap::Args;
 
 use vocc::bake::incremental::hashes_path;
 use vocc::bake::job::{BakeJob, BakeSummary, JobError, ReuseRefusal};
-use vocc::bake::params::{BakeParams, Effort, Generator, Slices};
+use vocc::bake::params::{BakeParams, Effort, Generator, Reach, Slices};
 use vocc::scene;
 
 use crate::args::{
@@ -93,14 +93,16 @@ pub struct BakeArgs {
     /// trade bake time for culled share (docs/RESULTS.md, "Speed against culling").
     #[arg(long, default_value = "default", value_parser = parse_effort)]
     pub effort: Effort,
-    /// How far past a cell's sides its own VOs are sought, metres (100 to 5000): the blockers
-    /// that may support them, its hidden maps and its scan lines. A longer reach finds VOs
-    /// farther out, which close the wedges the near VOs leave open along streets seen end-on:
-    /// on a large city it culls much more for two to three times the bake time, on a compact
-    /// district a little less (its maps grow coarser; README, "How far a cell reaches"). Every
-    /// reach is equally safe.
-    #[arg(long, default_value = "900", value_parser = parse_reach, value_name = "M")]
-    pub reach: f64,
+    /// How far past a cell's sides its own VOs are sought: `auto`, or metres (100 to 5000): the
+    /// blockers that may support them, its hidden maps and its scan lines. `auto` takes 6 mean
+    /// free paths of a sight line among the scene's buildings, 900 to 1800 m: 900 in a compact
+    /// city, further among free-standing towers (the summary says which). A longer reach finds
+    /// VOs farther out, which close the wedges the near VOs leave open along streets seen
+    /// end-on: on a large city it culls much more for two to three times the bake time, on a
+    /// compact district a little less (its maps grow coarser; README, "How far a cell
+    /// reaches"). Every reach is equally safe.
+    #[arg(long, default_value = "auto", value_parser = parse_reach, value_name = "auto|M")]
+    pub reach: Reach,
     /// The far field's blocks, metres a side (rounded to whole cells, at least one), or `off`.
     /// The far field seeks long VOs kilometres out once per block, certified hidden from the
     /// whole block, and offers them to its cells. Smaller blocks give each cell larger umbrae
@@ -225,9 +227,16 @@ pub fn run(a: BakeArgs) -> Result<()> {
         region,
         ..BakeParams::default()
             .with_effort(a.effort)
-            .with_reach(a.reach)
+            .with_reach_for(a.reach, &s)
             .with_far_block(a.far_block)
     };
+    let reach_m = params.search_m;
+    if a.reach == Reach::Auto && reach_m > vocc::bake::params::SEARCH_M {
+        eprintln!(
+            "reach: {reach_m:.0} m past each cell's sides (auto: a sight line runs {:.0} m between this scene's buildings on average; --reach sets it)",
+            vocc::bake::reach::mean_free_path(&s).unwrap_or(f64::NAN)
+        );
+    }
     let mut job = BakeJob::new(&s, params)?;
     if let Some((i, n)) = shard {
         job = job.shard(i, n)?;
@@ -301,6 +310,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
     if a.json {
         let mut v = summary_json(sum)?;
         v["load_s"] = load_s.into();
+        v["reach_m"] = reach_m.into();
         crate::report::round_timings(&mut v);
         v["store"] = a.output.display().to_string().into();
         v["hashes"] = hashes_file.display().to_string().into();

@@ -16,12 +16,24 @@ use crate::args::ReadArgs;
 pub fn info(files: &[PathBuf], read: &ReadArgs, json: bool) -> Result<()> {
     let s = scene::load(files, &read.options())?;
     let sum = summary::summarize(&s);
+    // What `vocc bake --reach auto` picks for this scene, and from what.
+    let path = vocc::bake::reach::mean_free_path(&s);
+    let reach = vocc::bake::reach::auto_reach(&s);
     let mut out = std::io::stdout().lock();
     if json {
-        serde_json::to_writer_pretty(&mut out, &sum)?;
+        let mut v = serde_json::to_value(&sum)?;
+        v["free_path_m"] = path.into();
+        v["auto_reach_m"] = reach.into();
+        serde_json::to_writer_pretty(&mut out, &v)?;
         writeln!(out)?;
     } else {
         print_summary(&mut out, &sum)?;
+        if let Some(p) = path {
+            writeln!(
+                out,
+                "sight lines: {p:.0} m between buildings on average; `vocc bake --reach auto` reaches {reach:.0} m past a cell's sides"
+            )?;
+        }
     }
     Ok(())
 }

@@ -178,9 +178,10 @@ enum Command {
         /// --debug: eye heights above the ground, metres, as `vocc bake --eye`.
         #[arg(long, default_value = "1.5..2.0", value_parser = parse_eye, value_name = "LOW..HIGH", allow_hyphen_values = true)]
         eye: (f64, f64),
-        /// --debug: how far past the cell's sides its VOs are sought, metres, as `vocc bake --reach`.
-        #[arg(long, default_value = "900", value_parser = args::parse_reach, value_name = "M")]
-        reach: f64,
+        /// --debug: how far past the cell's sides its VOs are sought, `auto` or metres, as `vocc
+        /// bake --reach`.
+        #[arg(long, default_value = "auto", value_parser = args::parse_reach, value_name = "auto|M")]
+        reach: vocc::bake::params::Reach,
         /// STORE then scene files; with --debug, scene files only.
         #[arg(required = true)]
         files: Vec<PathBuf>,

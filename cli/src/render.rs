@@ -12,7 +12,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 
 use vocc::bake::job::BakeJob;
-use vocc::bake::params::{BakeParams, Generator};
+use vocc::bake::params::{BakeParams, Generator, Reach};
 use vocc::runtime::culler::BoxTree;
 use vocc::runtime::CellId;
 use vocc::scene;
@@ -33,7 +33,7 @@ pub fn render_debug(
     at: (f64, f64),
     cell_size: f64,
     eye: (f64, f64),
-    reach: f64,
+    reach: Reach,
     generator: Generator,
     slice: Option<f64>,
     output: &Path,
@@ -45,7 +45,7 @@ pub fn render_debug(
         cell_size,
         eye,
         generator,
-        ..BakeParams::default().with_reach(reach)
+        ..BakeParams::default().with_reach_for(reach, &s)
     };
     let job = BakeJob::new(&s, params)?;
     let plan = job.plan();

@@ -31,7 +31,7 @@ use pyo3::types::{PyBytes, PyDict};
 
 use vocc::bake::job::{BakeJob, Progress};
 use vocc::bake::merge::{merge, ShardBytes};
-use vocc::bake::params::{BakeParams, Slices};
+use vocc::bake::params::{BakeParams, Reach, Slices};
 use vocc::runtime::culler::{pvs, BoxTree, MAX_BOXES};
 use vocc::runtime::format::{CellRecord, OwnedStore};
 use vocc::scene::check::{self, SceneCheck, SceneFacts};
@@ -191,7 +191,7 @@ fn scene_boxes<'py>(
 #[pyfunction]
 #[pyo3(signature = (
     paths, read=None, cell_size=100.0, eye=(1.5, 2.0), slices=None, max_vos=10, region=None,
-    threads=None, effort="default", progress=None, reach=900.0
+    threads=None, effort="default", progress=None, reach=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn bake<'py>(
@@ -206,7 +206,7 @@ fn bake<'py>(
     threads: Option<usize>,
     effort: &str,
     progress: Option<Py<PyAny>>,
-    reach: f64,
+    reach: Option<f64>,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)> {
     let opts = read_options(read)?;
     let s = load(py, paths, opts)?;
@@ -219,7 +219,7 @@ fn bake<'py>(
         region: region.map(|(x0, y0, x1, y1)| [x0 - o.x, y0 - o.y, x1 - o.x, y1 - o.y]),
         ..BakeParams::default()
             .with_effort(effort.parse().map_err(VoccError::new_err)?)
-            .with_reach(reach)
+            .with_reach_for(reach.map_or(Reach::Auto, Reach::Metres), &s)
     };
     let mut job = BakeJob::new(&s, params).map_err(lib_err)?;
     if let Some(n) = threads {

@@ -385,13 +385,14 @@ def bake(
     threads: Optional[int] = None,
     effort: str = "default",
     progress: Union[None, bool, Progress] = None,
-    reach: float = 900.0,
+    reach: Optional[float] = None,
 ) -> BakedStore:
     """Bakes scene files into an occluder store, as ``vocc bake`` does (same options, same
     bytes). ``region`` is a world rectangle ``(x0, y0, x1, y1)``: only the cells meeting it are
     baked. ``slices`` is 1..8, or None for automatic (5, or 8 in low-rise cells). ``effort`` is
     ``"fast"``, ``"default"`` or ``"tight"`` (``vocc bake --effort``). ``reach`` is how far past a cell's sides its own VOs
-    are sought, metres, 100 to 5000 (``vocc bake --reach``). ``threads`` defaults to every core.
+    are sought, metres, 100 to 5000, or None for automatic (``vocc bake --reach``: 900 in a
+    compact city, up to 1800 among free-standing towers). ``threads`` defaults to every core.
 
     ``progress``: a callable ``progress(done, total)`` called from this thread as cells finish;
     None (the default) shows a tqdm bar when tqdm is installed; False shows nothing. The GIL is
@@ -420,7 +421,7 @@ def bake(
             threads,
             str(effort),
             progress,
-            float(reach),
+            None if reach is None else float(reach),
         )
     finally:
         if bar is not None:

@@ -39,6 +39,7 @@ pub mod params;
 pub mod plan;
 pub mod propose;
 pub mod quantize;
+pub mod reach;
 pub mod select;
 pub mod share;
 pub mod slice;

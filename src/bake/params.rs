@@ -29,6 +29,15 @@ pub const MAX_REACH_M: f64 = 5000.0;
 /// holds at most 64 cells a side in any case ([`super::far::Blocks::new`]).
 pub const MAX_FAR_BLOCK_M: f64 = 10_000.0;
 
+/// How far a cell's own search reaches past its sides (`vocc bake --reach`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Reach {
+    /// Chosen from the scene ([`super::reach::auto_reach`]; the default).
+    Auto,
+    /// This many metres ([`MIN_REACH_M`] to [`MAX_REACH_M`]).
+    Metres(f64),
+}
+
 /// How many slices a cell gets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Slices {
@@ -272,6 +281,22 @@ impl BakeParams {
         self.map.px = d.px * self.map.half / d.half;
         self.propose.max_offset = reach_m;
         self
+    }
+
+    /// These parameters with the reach `vocc bake --reach auto` (the default) picks for `scene`
+    /// ([`super::reach::auto_reach`]: 6 mean free paths of a sight line among its buildings,
+    /// 900 to 1800 m): exactly [`with_reach`](Self::with_reach)`(`[`SEARCH_M`]`)` in a compact
+    /// city, further among free-standing towers.
+    pub fn with_auto_reach(self, scene: &crate::scene::Scene) -> BakeParams {
+        self.with_reach(super::reach::auto_reach(scene))
+    }
+
+    /// These parameters with `reach` ([`Self::with_auto_reach`] or [`Self::with_reach`]).
+    pub fn with_reach_for(self, reach: Reach, scene: &crate::scene::Scene) -> BakeParams {
+        match reach {
+            Reach::Auto => self.with_auto_reach(scene),
+            Reach::Metres(m) => self.with_reach(m),
+        }
     }
 
     /// These parameters with far-field blocks of about `block_m` metres a side (`vocc bake

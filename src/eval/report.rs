@@ -258,9 +258,10 @@ pub fn dataset_section(
         p.truth.seed
     );
 
-    // The default bake, every cell.
+    // The default bake, every cell: `vocc bake`'s defaults, its reach chosen from the scene.
+    let defaults = BakeParams::default().with_auto_reach(&s);
     progress(&format!("{}: default bake", d.name));
-    let main = bake(&s, BakeParams::default(), None)?;
+    let main = bake(&s, defaults.clone(), None)?;
     let store = Store::parse(&main.bytes).expect("valid store");
     let all = sample_cells(&store, None, p.seed);
     progress(&format!("{}: ground truth of {} cells", d.name, all.len()));
@@ -420,7 +421,7 @@ pub fn dataset_section(
     // so its cells cost less each: compare like with like). The same records: a block's far
     // pieces depend on the block alone.
     progress(&format!("{}: default bake of the sample", d.name));
-    let main_sample_ms = bake_ms(&bake(&s, BakeParams::default(), Some(&sample))?.cells);
+    let main_sample_ms = bake_ms(&bake(&s, defaults.clone(), Some(&sample))?.cells);
     let sm_main = summarize(&s, &sample_main);
     row(
         &mut md,
@@ -437,7 +438,7 @@ pub fn dataset_section(
     progress(&format!("{}: no-fusion baseline", d.name));
     let mut bp = BakeParams {
         generator: Generator::Growth,
-        ..BakeParams::default()
+        ..defaults.clone()
     };
     bp.grow.single_object = true;
     let base = bake(&s, bp, Some(&sample))?;
@@ -460,18 +461,18 @@ pub fn dataset_section(
             "growth generator (`--generator growth`, the default before 0.2)",
             BakeParams {
                 generator: Generator::Growth,
-                ..BakeParams::default()
+                ..defaults.clone()
             },
         ),
         (
             "fast",
             "`--effort fast`",
-            BakeParams::default().with_effort(Effort::Fast),
+            defaults.clone().with_effort(Effort::Fast),
         ),
         (
             "tight",
             "`--effort tight`",
-            BakeParams::default().with_effort(Effort::Tight),
+            defaults.clone().with_effort(Effort::Tight),
         ),
     ];
     for (key, label, params) in variants {
@@ -572,7 +573,7 @@ pub fn dataset_section(
             &s,
             BakeParams {
                 slices: Slices::Fixed(n),
-                ..BakeParams::default()
+                ..defaults.clone()
             },
             Some(&sample),
         )?;
@@ -621,7 +622,7 @@ pub fn dataset_section(
         progress(&format!("{}: {size} m cells", d.name));
         let params = BakeParams {
             cell_size: size,
-            ..BakeParams::default()
+            ..defaults.clone()
         };
         let plan = Plan::new(&s, params.clone()).expect("valid");
         // Sample over the grid of this size.
