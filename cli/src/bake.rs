@@ -94,9 +94,10 @@ pub struct BakeArgs {
     #[arg(long, default_value = "default", value_parser = parse_effort)]
     pub effort: Effort,
     /// How far past a cell's sides its own VOs are sought: `auto`, or metres (100 to 5000): the
-    /// blockers that may support them, its hidden maps and its scan lines. `auto` takes 6 mean
+    /// blockers that may support them, its hidden maps and its scan lines. `auto` takes 16 mean
     /// free paths of a sight line among the scene's buildings, 900 to 1800 m: 900 in a compact
-    /// city, further among free-standing towers (the summary says which). A longer reach finds
+    /// or low-rise city, further among free-standing towers or wide streets (the summary says
+    /// which). A longer reach finds
     /// VOs farther out, which close the wedges the near VOs leave open along streets seen
     /// end-on: on a large city it culls much more for two to three times the bake time, on a
     /// compact district a little less (its maps grow coarser; README, "How far a cell

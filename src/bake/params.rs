@@ -284,9 +284,10 @@ impl BakeParams {
     }
 
     /// These parameters with the reach `vocc bake --reach auto` (the default) picks for `scene`
-    /// ([`super::reach::auto_reach`]: 6 mean free paths of a sight line among its buildings,
-    /// 900 to 1800 m): exactly [`with_reach`](Self::with_reach)`(`[`SEARCH_M`]`)` in a compact
-    /// city, further among free-standing towers.
+    /// ([`super::reach::auto_reach`]: 16 mean free paths of a sight line among its buildings,
+    /// 900 to 1800 m; 900 in a low-rise scene): exactly
+    /// [`with_reach`](Self::with_reach)`(`[`SEARCH_M`]`)` in a compact or low-rise city,
+    /// further among free-standing towers or wide streets.
     pub fn with_auto_reach(self, scene: &crate::scene::Scene) -> BakeParams {
         self.with_reach(super::reach::auto_reach(scene))
     }

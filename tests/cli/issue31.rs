@@ -98,19 +98,19 @@ fn bake_reach_900_is_the_default_and_out_of_range_is_refused() {
     );
 }
 
-/// Issue 31, the held-out district of towers: `--reach auto` (the default) reaches 6 mean free
-/// paths of a sight line, in steps of 100 m. Among 15 x 15 towers of 30 m on a 100 m grid the
-/// path is `pi A / P` = pi 1430^2 / (225 * 120) = 237.9 m, so the default bake reaches 1400 m: it
-/// says so, writes it in its JSON, and its store is `--reach 1400`'s byte for byte, not
-/// `--reach 900`'s. `vocc info` reports the path and the reach.
+/// Issue 31, the held-out scenes: `--reach auto` (the default) reaches 16 mean free paths of a
+/// sight line, in steps of 100 m. Among 15 x 15 towers of 30 m on a 60 m grid the path is
+/// `pi A / P` = pi 870^2 / (225 * 120) = 88.06 m, so the default bake reaches 1400 m: it says
+/// so, writes it in its JSON, and its store is `--reach 1400`'s byte for byte, not `--reach
+/// 900`'s. `vocc info` reports the path and the reach.
 #[test]
-fn bake_reach_auto_reaches_six_free_paths_among_towers() {
+fn bake_reach_auto_reaches_sixteen_free_paths_among_towers() {
     let dir = common::temp_dir("cli-bake-reach-auto");
     let towers: Vec<(f64, f64, f64, f64)> = (0..225)
         .map(|k| {
             let (i, j) = ((k % 15) as f64, (k / 15) as f64);
             let h = 60.0 + 37.0 * ((k * 7) % 11) as f64;
-            (1_842_000.0 + 100.0 * i, 5_176_000.0 + 100.0 * j, 30.0, h)
+            (1_842_000.0 + 60.0 * i, 5_176_000.0 + 60.0 * j, 30.0, h)
         })
         .collect();
     let scene = dir.join("towers.geojson");
@@ -124,7 +124,7 @@ fn bake_reach_auto_reaches_six_free_paths_among_towers() {
             "--height-attr",
             "height",
             "--region",
-            "1842650,5176650,1842750,5176750",
+            "1842400,5176400,1842450,5176450",
             "--json",
             "-o",
             &store,
@@ -143,14 +143,14 @@ fn bake_reach_auto_reaches_six_free_paths_among_towers() {
     assert_eq!(v["reach_m"], 1400.0, "{v}");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("reach: 1400 m past each cell's sides (auto: a sight line runs 238 m"),
+        err.contains("reach: 1400 m past each cell's sides (auto: a sight line runs 88 m"),
         "{err}"
     );
     assert_eq!(bake(&["--reach", "1400"], "r1400.vocc").1, auto);
     assert_ne!(bake(&["--reach", "900"], "r900.vocc").1, auto);
     let out = vocc(&["info", &scene, "--height-attr", "height", "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let expected = std::f64::consts::PI * 1430.0 * 1430.0 / (225.0 * 120.0);
+    let expected = std::f64::consts::PI * 870.0 * 870.0 / (225.0 * 120.0);
     assert!(
         (v["free_path_m"].as_f64().unwrap() - expected).abs() < 1e-6,
         "{v}"
