@@ -9,13 +9,13 @@
 //! occlusion has closed over every sight line from the cell. Among buildings scattered with a
 //! mean width `w` per `A / n` of ground, a sight line meets the next one after about `A / (n w)`
 //! metres (the mean free path; by Cauchy's formula a convex footprint's mean width is its
-//! perimeter over pi). In a compact city (Tokyo centre, Lyon, the generated 10^6 city: 32 to 39
+//! perimeter over pi). In a compact city (Tokyo centre, Lyon, the generated 10^6 city: 30 to 39
 //! m, from the boxes below) the default 900 m holds many free paths and closes the wedges a
 //! cell's near VOs leave; among free-standing towers (a path of 300 m) or in a city of wide
 //! streets (110 m) it stops where the hidden ground only begins, and 1.7 to 1.8 km cull half as
 //! much again (README, "How far a cell reaches"). In a low-rise scene (the median object under
 //! [`AUTO_REACH_LOW_RISE_M`] tall) a VO hides little far off from every point of a cell, and a
-//! longer reach only costs (Salt River's houses, 4 m, path 129 m; README), so it keeps 900 m.
+//! longer reach only costs (Salt River's houses, 4 m, path 63 m; README), so it keeps 900 m.
 //!
 //! Invariants: the reach is a function of the whole scene alone (every shard, region and
 //! rebake of one scene gets the same), never below [`SEARCH_M`] (a dense or low-rise city bakes
@@ -41,25 +41,54 @@ pub const AUTO_REACH_STEP_M: f64 = 100.0;
 /// and keeps [`SEARCH_M`] (module header).
 pub const AUTO_REACH_LOW_RISE_M: f64 = 8.0;
 
+/// The side of the squares whose occupied ones make the ground the buildings stand on, metres
+/// ([`mean_free_path`]).
+pub const OCCUPIED_SQUARE_M: f64 = 250.0;
+
 /// The mean free path of a horizontal sight line among the scene's objects, metres: `pi A / P`,
-/// with `A` the area of the objects' bounding rectangle and `P` the sum of the perimeters of
-/// their boxes (objects of no height left out). `None` without two such objects or without area.
+/// with `P` the sum of the perimeters of their boxes (objects of no height left out) and `A` the
+/// ground they stand on: the squares of [`OCCUPIED_SQUARE_M`] (on a grid from the boxes' lowest
+/// corner, clipped to their bounding rectangle) that hold an object's box centre. So a stray
+/// object kilometres off, a river or a park adds at most a square, not the bounding rectangle's
+/// whole emptiness (which would lengthen the path and so the reach). `None` without two such
+/// objects or without area.
 pub fn mean_free_path(scene: &Scene) -> Option<f64> {
+    let boxes: Vec<_> = scene
+        .objects
+        .iter()
+        .map(|o| o.bbox)
+        .filter(|b| {
+            b.max.z > b.min.z && (b.max.x - b.min.x).is_finite() && (b.max.y - b.min.y).is_finite()
+        })
+        .collect();
+    if boxes.len() < 2 {
+        return None;
+    }
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    let (mut perimeter, mut n) = (0.0, 0usize);
-    for o in &scene.objects {
-        let b = o.bbox;
-        let (w, d) = (b.max.x - b.min.x, b.max.y - b.min.y);
-        if !(b.max.z > b.min.z) || !w.is_finite() || !d.is_finite() {
-            continue;
-        }
-        perimeter += 2.0 * (w + d);
-        n += 1;
+    let mut perimeter = 0.0;
+    for b in &boxes {
+        perimeter += 2.0 * ((b.max.x - b.min.x) + (b.max.y - b.min.y));
         lo = [lo[0].min(b.min.x), lo[1].min(b.min.y)];
         hi = [hi[0].max(b.max.x), hi[1].max(b.max.y)];
     }
-    let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
-    (n >= 2 && area > 0.0 && perimeter > 0.0).then(|| std::f64::consts::PI * area / perimeter)
+    let s = OCCUPIED_SQUARE_M;
+    let mut squares: Vec<(i64, i64)> = boxes
+        .iter()
+        .map(|b| {
+            let c = [0.5 * (b.min.x + b.max.x), 0.5 * (b.min.y + b.max.y)];
+            (((c[0] - lo[0]) / s) as i64, ((c[1] - lo[1]) / s) as i64)
+        })
+        .collect();
+    squares.sort_unstable();
+    squares.dedup();
+    let area: f64 = squares
+        .iter()
+        .map(|&(i, j)| {
+            let side = |k: i64, a: usize| (hi[a] - lo[a] - k as f64 * s).clamp(0.0, s);
+            side(i, 0) * side(j, 1)
+        })
+        .sum();
+    (area > 0.0 && perimeter > 0.0).then(|| std::f64::consts::PI * area / perimeter)
 }
 
 /// The median height of the scene's objects (box top minus box bottom; objects of no height
@@ -103,6 +132,51 @@ pub fn reach_of(path: Option<f64>, median_height: Option<f64>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::{load_bytes, ReadOptions};
+
+    /// A scene of 30 m squares, 40 m tall, with lower-left corners at `corners` (metres).
+    fn squares(corners: &[(f64, f64)]) -> Scene {
+        let f: Vec<String> = corners
+            .iter()
+            .map(|&(x, y)| {
+                let (a, b) = (x + 30.0, y + 30.0);
+                format!(
+                    r#"{{"type":"Feature","properties":{{"height":40}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{a},{y}],[{a},{b}],[{x},{b}],[{x},{y}]]]}}}}"#
+                )
+            })
+            .collect();
+        let json = format!(
+            r#"{{"type":"FeatureCollection","features":[{}]}}"#,
+            f.join(",")
+        );
+        let opts = ReadOptions {
+            height_attr: Some("height".into()),
+            ..ReadOptions::default()
+        };
+        load_bytes(&[("s.geojson".into(), json.as_bytes())], &opts).unwrap()
+    }
+
+    /// 15 x 15 squares 60 m apart: they span 870 m, every 250 m square of it holds one, so the
+    /// path is pi 870^2 / (225 * 120) = 88.06 m. One more square 5 km off adds one occupied
+    /// square (30 m by 30, clipped to the new bounding rectangle) and its perimeter, not the
+    /// 5 km of empty ground between (that would make the path 84 km); the district's 4 x 4
+    /// squares are now whole (the rectangle no longer clips them at 870 m): 116 m.
+    #[test]
+    fn the_free_path_counts_the_occupied_ground_not_a_stray_objects_emptiness() {
+        let mut c: Vec<(f64, f64)> = (0..225)
+            .map(|k| (60.0 * (k % 15) as f64, 60.0 * (k / 15) as f64))
+            .collect();
+        let pi = std::f64::consts::PI;
+        let p = mean_free_path(&squares(&c)).unwrap();
+        assert!((p - pi * 870.0 * 870.0 / 27_000.0).abs() < 1e-9, "{p}");
+        assert_eq!(auto_reach(&squares(&c)), 1400.0);
+        c.push((5000.0, 5000.0));
+        let p = mean_free_path(&squares(&c)).unwrap();
+        let expected = pi * (16.0 * 250.0 * 250.0 + 30.0 * 30.0) / (226.0 * 120.0);
+        assert!((p - expected).abs() < 1e-9, "{p} against {expected}");
+        assert_eq!(auto_reach(&squares(&c)), AUTO_REACH_MAX_M);
+        assert_eq!(mean_free_path(&squares(&c[..1])), None);
+    }
 
     #[test]
     fn a_dense_or_low_city_keeps_the_default_and_a_sparse_one_reaches_further_in_steps() {
@@ -110,7 +184,7 @@ mod tests {
         assert_eq!(reach_of(None, tall), SEARCH_M);
         assert_eq!(reach_of(Some(f64::INFINITY), tall), SEARCH_M);
         // Tokyo centre, Lyon, the generated 10^6 city.
-        for p in [32.0, 38.4, 39.2, 56.2] {
+        for p in [31.6, 29.5, 39.2, 56.2] {
             assert_eq!(reach_of(Some(p), tall), SEARCH_M, "{p}");
         }
         // The wide-street stand-in, the towers' (README).
@@ -118,8 +192,8 @@ mod tests {
         assert_eq!(reach_of(Some(298.1), Some(101.1)), AUTO_REACH_MAX_M);
         assert_eq!(reach_of(Some(88.06), tall), 1400.0);
         // Salt River's houses: low-rise, whatever the path.
-        assert_eq!(reach_of(Some(129.0), Some(4.1)), SEARCH_M);
-        assert_eq!(reach_of(Some(129.0), None), SEARCH_M);
+        assert_eq!(reach_of(Some(62.8), Some(4.1)), SEARCH_M);
+        assert_eq!(reach_of(Some(62.8), None), SEARCH_M);
         let mut last = 0.0;
         for k in 0..2000 {
             let r = reach_of(Some(k as f64), tall);
