@@ -82,7 +82,8 @@ fresh-clone:
 # Regenerates the pictures in docs/img: the paper's Fig. 3 configuration, a Lyon cell, and two
 # Lyon cells before (the growth generator) and after (the long generator), like the paper's Fig. 8,
 # and a Tokyo cell the same way (its 2 MB SVGs are shot to PNG with Chromium: CHROMIUM=path); an
-# interior cell of the generated 10^6 city at --reach 900 and 2500 (15 MB SVGs, shot to JPEG).
+# interior cell of the generated 10^6 city at --reach 900 and 2500 (15 MB SVGs, shot to JPEG); a
+# cell of the towers' stand-in (tools/gen_towers.py) at --reach 900 and auto.
 TOKYO = data/tokyo-central/tokyo_central_utm54n.geojson
 CHROMIUM ?= chromium
 pictures:
@@ -130,6 +131,16 @@ pictures:
 		$(CHROMIUM) --headless --no-sandbox --disable-gpu --hide-scrollbars --window-size=900,980 \
 			--screenshot=$(CURDIR)/docs/img/gen_city_1e6_reach_$$reach.jpg \
 			file://$(CURDIR)/target/tmp/pictures/city_$$reach.svg || exit 1; \
+	done
+
+	mkdir -p target/tmp/pictures
+	python3 tools/gen_towers.py > target/tmp/pictures/towers.geojson
+	for reach in 900 auto; do \
+		$(CARGO) run --locked --release -- bake target/tmp/pictures/towers.geojson --height-attr height \
+			--reach $$reach -o target/tmp/pictures/towers_$$reach.vocc && \
+		$(CARGO) run --locked --release -- render target/tmp/pictures/towers_$$reach.vocc \
+			target/tmp/pictures/towers.geojson --height-attr height --cell 498 --radius 2000 \
+			-o docs/img/towers_reach_$$reach.svg || exit 1; \
 	done
 
 # Fuzzing (docs/FUZZING.md): every cargo-fuzz target for FUZZ_SECONDS each (default 600), one after
