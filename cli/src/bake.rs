@@ -97,11 +97,10 @@ pub struct BakeArgs {
     /// blockers that may support them, its hidden maps and its scan lines. `auto` takes 16 mean
     /// free paths of a sight line among the scene's buildings, 900 to 1800 m: 900 in a compact
     /// or low-rise city, further among free-standing towers or wide streets (the summary says
-    /// which). A longer reach finds
-    /// VOs farther out, which close the wedges the near VOs leave open along streets seen
-    /// end-on: on a large city it culls much more for two to three times the bake time, on a
-    /// compact district a little less (its maps grow coarser; README, "How far a cell
-    /// reaches"). Every reach is equally safe.
+    /// which). A longer reach finds VOs farther out, which close the wedges the near VOs leave
+    /// open along streets seen end-on: on a large city it culls much more for two to three
+    /// times the bake time, on a compact district a little less (its maps grow coarser; README,
+    /// "How far a cell reaches"). Every reach is equally safe.
     #[arg(long, default_value = "auto", value_parser = parse_reach, value_name = "auto|M")]
     pub reach: Reach,
     /// The far field's blocks, metres a side (rounded to whole cells, at least one), or `off`.

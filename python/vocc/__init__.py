@@ -390,9 +390,10 @@ def bake(
     """Bakes scene files into an occluder store, as ``vocc bake`` does (same options, same
     bytes). ``region`` is a world rectangle ``(x0, y0, x1, y1)``: only the cells meeting it are
     baked. ``slices`` is 1..8, or None for automatic (5, or 8 in low-rise cells). ``effort`` is
-    ``"fast"``, ``"default"`` or ``"tight"`` (``vocc bake --effort``). ``reach`` is how far past a cell's sides its own VOs
-    are sought, metres, 100 to 5000, or None for automatic (``vocc bake --reach``: 900 in a
-    compact or low-rise city, up to 1800 among free-standing towers or wide streets). ``threads`` defaults to every core.
+    ``"fast"``, ``"default"`` or ``"tight"`` (``vocc bake --effort``). ``reach`` is how far past
+    a cell's sides its own VOs are sought, metres, 100 to 5000, or None for automatic (``vocc
+    bake --reach``: 900 in a compact or low-rise city, up to 1800 among free-standing towers or
+    wide streets). ``threads`` defaults to every core.
 
     ``progress``: a callable ``progress(done, total)`` called from this thread as cells finish;
     None (the default) shows a tqdm bar when tqdm is installed; False shows nothing. The GIL is

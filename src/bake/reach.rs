@@ -35,8 +35,8 @@ use crate::scene::Scene;
 pub const AUTO_REACH_FREE_PATHS: f64 = 16.0;
 /// The longest reach [`auto_reach`] picks, metres: the bake's cost grows with the reach's square
 /// where the scene is not sparse (the wide-street stand-in: 1.7 times the cells' summed bake
-/// time at 1.7 km), and
-/// 1.8 km took the towers' stand-in to within half a point of what 2.5 km culls.
+/// time at 1.7 km), and 1.8 km took the towers' stand-in to within half a point of what 2.5 km
+/// culls.
 pub const AUTO_REACH_MAX_M: f64 = 1800.0;
 /// [`auto_reach`] rounds down to a multiple of this, metres.
 pub const AUTO_REACH_STEP_M: f64 = 100.0;
@@ -135,28 +135,14 @@ pub fn reach_of(path: Option<f64>, median_height: Option<f64>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{load_bytes, ReadOptions};
 
     /// A scene of 30 m squares, 40 m tall, with lower-left corners at `corners` (metres).
     fn squares(corners: &[(f64, f64)]) -> Scene {
-        let f: Vec<String> = corners
+        let b: Vec<([f64; 4], f64)> = corners
             .iter()
-            .map(|&(x, y)| {
-                let (a, b) = (x + 30.0, y + 30.0);
-                format!(
-                    r#"{{"type":"Feature","properties":{{"height":40}},"geometry":{{"type":"Polygon","coordinates":[[[{x},{y}],[{a},{y}],[{a},{b}],[{x},{b}],[{x},{y}]]]}}}}"#
-                )
-            })
+            .map(|&(x, y)| ([x, y, x + 30.0, y + 30.0], 40.0))
             .collect();
-        let json = format!(
-            r#"{{"type":"FeatureCollection","features":[{}]}}"#,
-            f.join(",")
-        );
-        let opts = ReadOptions {
-            height_attr: Some("height".into()),
-            ..ReadOptions::default()
-        };
-        load_bytes(&[("s.geojson".into(), json.as_bytes())], &opts).unwrap()
+        crate::scene::boxes_scene(&b)
     }
 
     /// 15 x 15 squares 60 m apart: they span 870 m, every 250 m square of it holds one, so the

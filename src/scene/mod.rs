@@ -564,3 +564,29 @@ impl Scene {
             .fold(Aabb3::EMPTY, |acc, o| acc.union(o.bbox))
     }
 }
+
+/// A scene of axis-aligned boxes `[x0, y0, x1, y1]` (world metres) with their heights, read from
+/// GeoJSON as a user's file is. Tests only (`eval::bound`, `bake::reach`).
+#[cfg(test)]
+pub(crate) fn boxes_scene(boxes: &[([f64; 4], f64)]) -> Scene {
+    let features: Vec<String> = boxes
+        .iter()
+        .map(|([x0, y0, x1, y1], h)| {
+            format!(
+                r#"{{"type":"Feature","properties":{{"height":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x0},{y0}],[{x1},{y0}],[{x1},{y1}],[{x0},{y1}],[{x0},{y0}]]]}}}}"#
+            )
+        })
+        .collect();
+    let json = format!(
+        r#"{{"type":"FeatureCollection","features":[{}]}}"#,
+        features.join(",")
+    );
+    load_bytes(
+        &[("boxes.geojson".into(), json.as_bytes())],
+        &ReadOptions {
+            height_attr: Some("height".into()),
+            ..ReadOptions::default()
+        },
+    )
+    .unwrap()
+}

@@ -6,36 +6,12 @@
 //! Invariant: expected answers are derived by hand from the scene.
 
 use super::*;
-use crate::scene::{load_bytes, ReadOptions};
+use crate::scene::ReadOptions;
 
 /// A scene from axis-aligned boxes `[x0, y0, x1, y1]` (world metres), 20 m tall, in order.
 fn boxes_scene(boxes: &[[f64; 4]]) -> Scene {
     let tall: Vec<([f64; 4], f64)> = boxes.iter().map(|&b| (b, 20.0)).collect();
-    boxes_scene_of(&tall)
-}
-
-/// A scene from axis-aligned boxes `[x0, y0, x1, y1]` (world metres) and their heights.
-fn boxes_scene_of(boxes: &[([f64; 4], f64)]) -> Scene {
-    let features: Vec<String> = boxes
-            .iter()
-            .map(|([x0, y0, x1, y1], h)| {
-                format!(
-                    r#"{{"type":"Feature","properties":{{"height":{h}}},"geometry":{{"type":"Polygon","coordinates":[[[{x0},{y0}],[{x1},{y0}],[{x1},{y1}],[{x0},{y1}],[{x0},{y0}]]]}}}}"#
-                )
-            })
-            .collect();
-    let json = format!(
-        r#"{{"type":"FeatureCollection","features":[{}]}}"#,
-        features.join(",")
-    );
-    load_bytes(
-        &[("boxes.geojson".into(), json.as_bytes())],
-        &ReadOptions {
-            height_attr: Some("height".into()),
-            ..ReadOptions::default()
-        },
-    )
-    .unwrap()
+    crate::scene::boxes_scene(&tall)
 }
 
 /// The cell `[0, 0] - [100, 100]` (world) in the scene's local frame.
@@ -127,7 +103,7 @@ fn the_sliced_ceiling_culls_only_what_rule_3_lets_a_vo_as_tall_as_the_row_hide()
     b.push(([-20.0, 200.0, 0.0, 215.0], 30.0));
     b.push(([0.0, 400.0, 30.0, 420.0], 15.0));
     b.push(([60.0, 400.0, 90.0, 420.0], 30.0));
-    let s = boxes_scene_of(&b);
+    let s = crate::scene::boxes_scene(&b);
     let r = cell(&s);
     let p = CeilingParams::default();
     assert_eq!(ceiling_2d(&s, r, &p).culled, vec![26, 27, 28, 29]);
@@ -303,7 +279,7 @@ fn the_scene_ceiling_lets_a_tall_row_hide_a_tower() {
     // and one of 64 m above the eyes allows about 168 m there.
     let mut b = row_of(100.0);
     b.push(([0.0, 400.0, 30.0, 420.0], 150.0));
-    let s = boxes_scene_of(&b);
+    let s = crate::scene::boxes_scene(&b);
     let r = cell(&s);
     let h = GROUND_EYES;
     assert!(ceiling_sliced(&s, r, h, &CeilingParams::default())
