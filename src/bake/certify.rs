@@ -2,11 +2,12 @@
 //!
 //! Input: a cell, its eyes and ground, the usable blockers with their rule-2 [`Support`], the
 //! store's [`Frame`], and a proposal `a`–`b` at a height level.
-//! Output: a [`Certified`] VO: its 5 stored bytes, the dequantized geometry the runtime will
+//! Output: a [`Certified`] VO: its stored bytes, the dequantized geometry the runtime will
 //! read, and the hidden part of the proposal it came from; or `None`.
-//! Rule: the blockers that support the VO by rule 2 (for its own `d_near`) go to the exact
-//! verifier ([`Verifier::hidden_parts_by`]), which returns the certified hidden pieces of the
-//! proposal, each with the blockers its certificates use; the piece is quantized ([`quantize`]),
+//! Rule: the blockers that support the proposal by rule 2, with the tighter bounds for its own
+//! segment (which hold for each of its sub-segments), go to the exact verifier
+//! ([`Verifier::hidden_parts_by`]), which returns the certified hidden pieces of the proposal,
+//! each with the blockers its certificates use; the piece is quantized ([`quantize`]),
 //! and every quantized candidate is checked again from its dequantized form: rule 2 for the
 //! dequantized segment, then either the exact test that it lies in the closed umbra of the
 //! certified piece ([`point_in_umbra`] at both ends: every segment from the cell to it then
@@ -162,12 +163,17 @@ impl<'a> Certifier<'a> {
             let ids: Vec<u32> = (0..self.blockers.len() as u32)
                 .filter(|&i| self.blockers[i as usize].1.supports(e0, e1, g, h, dn))
                 .collect();
-            Verifier::subset(self.cell, self.index, &ids)
-                // Pieces shorter than MIN_PIECE_M are dropped anyway: the sweep may step that far
-                // past points it cannot certify.
-                .with_max_step(MIN_PIECE_M)
-                .with_min_step(MIN_STEP_M)
+            self.verifier_over(&ids)
         })
+    }
+
+    /// A verifier over the blockers `ids` (indices into `blockers`).
+    fn verifier_over(&self, ids: &[u32]) -> Verifier<'a> {
+        Verifier::subset(self.cell, self.index, ids)
+            // Pieces shorter than MIN_PIECE_M are dropped anyway: the sweep may step that far
+            // past points it cannot certify.
+            .with_max_step(MIN_PIECE_M)
+            .with_min_step(MIN_STEP_M)
     }
 
     /// For each blocker that may meet a segment from the cell to `a`–`b` (its box meets the box
@@ -223,6 +229,45 @@ impl<'a> Certifier<'a> {
         out
     }
 
+    /// The blockers that support a VO of `level` on the segment `a`–`b` by rule 2 with the
+    /// tighter bounds for that segment ([`Support::supports_beside`]), ascending indices into
+    /// `blockers`: those whose box meets the box of the cell and the segment (the others meet
+    /// no segment from the cell to it). They support every sub-segment as well: a sub-segment
+    /// lies no nearer the cell, no nearer a blocker, and on the same line, so each bound only
+    /// falls for it. The cheap tests come first: the ratio at its cap of 1 (a blocker as tall as
+    /// the VO supports it wherever it stands), then the bound with an upper estimate of
+    /// `dist(B, s)` (its first vertex's distance), which refuses when even that fails, then the
+    /// bound with 0, which admits when that passes, and only then the exact least distance.
+    fn supporters_beside(&self, level: u8, a: DVec2, b: DVec2) -> Vec<u32> {
+        let (e0, e1, g) = self.heights;
+        let h = self.frame.vo_top(e1, level);
+        let dn = d_near(self.cell, &[a, b]);
+        let (lo, hi) = self
+            .cell
+            .iter()
+            .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
+        let mut out = Vec::new();
+        for (i, &(p, s)) in self.blockers.iter().enumerate() {
+            let (pl, ph) = self.index.bounds(i as u32);
+            if !(pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y) {
+                continue;
+            }
+            if s.supports_anywhere(e0, e1, g, h) {
+                out.push(i as u32);
+                continue;
+            }
+            let line = line_lambda(self.cell, p, a, b);
+            let beside = |d_bs: f64| s.supports_beside(e0, e1, g, h, dn, d_bs, line);
+            let d_hi = p
+                .first()
+                .map_or(f64::INFINITY, |&v| point_segment_distance(v, a, b));
+            if beside(d_hi) && (beside(0.0) || beside(d_near(p, &[a, b]))) {
+                out.push(i as u32);
+            }
+        }
+        out
+    }
+
     /// The band a segment belongs to, and the check that it does (rounding-safe: the band is
     /// taken from its distance less a margin, then its distance is checked against the floor).
     fn band(&self, a: DVec2, b: DVec2, margin: f64) -> usize {
@@ -234,12 +279,13 @@ impl<'a> Certifier<'a> {
     pub fn pieces(&self, level: u8, a: DVec2, b: DVec2, stats: &mut CertifyStats) -> Vec<Piece> {
         stats.tried += 1;
         stats.proposed_m += a.distance(b);
-        // Pieces are no nearer the cell than the proposal.
-        let band = self.band(a, b, 0.0);
         for level in (1..=level).rev().take(LEVEL_FALLBACKS) {
             stats.checks += 1;
+            // Over the proposal's own supporters: rule 2's tighter bounds for its segment hold
+            // for each of its pieces (`supporters_beside`).
+            let ids = self.supporters_beside(level, a, b);
             let mut out: Vec<Piece> = self
-                .verifier(level, band)
+                .verifier_over(&ids)
                 .hidden_parts_by(a, b)
                 .into_iter()
                 .filter(|(p, _)| p.p0.distance(p.p1) >= MIN_PIECE_M)
@@ -649,13 +695,16 @@ mod tests {
                 }
             }
         });
-        // The whole row, but VOs above its top (at the proposal's level and every fallback):
-        // its blockers do not support them (rule 2, the ratio at its cap of 1 this far out).
+        // The whole row, but VOs above what its blockers support on this segment (at the
+        // proposal's level and every fallback): rule 2 with the tighter bounds for the segment,
+        // which the row at 60 m supports up to about 78 m (the line's bound: the row stands 60
+        // m in front of the proposal's line, which lies 250 m from the cell's far side).
         with_certifier(&street(&[]), |c| {
             let e1 = c.heights.1;
-            let above = (1..HEIGHT_LEVELS)
-                .find(|&l| c.frame.vo_top(e1, l) > 61.0)
-                .unwrap();
+            let supported = c.levels_beside(a, b).iter().map(|&(_, l)| l).max().unwrap();
+            let top = c.frame.vo_top(e1, supported);
+            assert!(top > 61.0 && top < 80.0, "{top}");
+            let above = supported + 1;
             let level = above + LEVEL_FALLBACKS as u8 - 1;
             assert!(
                 level < HEIGHT_LEVELS,
@@ -665,8 +714,19 @@ mod tests {
             assert!(c
                 .pieces(level, a, b, &mut CertifyStats::default())
                 .is_empty());
+            // At the highest level they support, taller than the row itself: certified (the
+            // band's bound, the ratio at its cap of 1 this far out, would refuse it).
+            let (e0, g) = (c.heights.0, c.heights.2);
+            let row: Vec<&Support> = c
+                .blockers
+                .iter()
+                .map(|(_, s)| s)
+                .filter(|s| s.top == 60.0)
+                .collect();
+            assert_eq!(row.len(), 10);
+            assert!(row.iter().all(|s| !s.supports(e0, e1, g, top, 150.0)));
             assert!(!c
-                .pieces(above - 1, a, b, &mut CertifyStats::default())
+                .pieces(supported, a, b, &mut CertifyStats::default())
                 .is_empty());
         });
     }

@@ -187,6 +187,12 @@ impl Support {
         self.top >= high + RULE2_SLACK_M * (1.0 + high.abs())
     }
 
+    /// Rule 2 with the ratio at its cap of 1 (`lambda <= 1` always): this blocker supports a VO
+    /// of top `h` and bottom `g` wherever the VO stands.
+    pub fn supports_anywhere(&self, e0: f64, e1: f64, g: f64, h: f64) -> bool {
+        self.holds(e0, e1, g, h, 1.0)
+    }
+
     /// Rule 2: this blocker supports a VO of top `h`, bottom `g`, at least `d_near_s` from the
     /// cell, for eyes in `[e0, e1]`: `lambda <= min(1, d_far(B) / d_near(s))`.
     pub fn supports(&self, e0: f64, e1: f64, g: f64, h: f64, d_near_s: f64) -> bool {
