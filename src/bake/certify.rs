@@ -176,6 +176,27 @@ impl<'a> Certifier<'a> {
             .with_min_step(MIN_STEP_M)
     }
 
+    /// The blockers that may meet a segment from the cell to `a`–`b`: those whose box meets the
+    /// box of both (the others meet none), as (index into `blockers`, polygon, support),
+    /// ascending by index.
+    fn near_segment(
+        &self,
+        a: DVec2,
+        b: DVec2,
+    ) -> impl Iterator<Item = (u32, &'a [DVec2], Support)> + '_ {
+        let (lo, hi) = self
+            .cell
+            .iter()
+            .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
+        (0u32..)
+            .zip(&self.blockers)
+            .filter(move |&(i, _)| {
+                let (pl, ph) = self.index.bounds(i);
+                pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y
+            })
+            .map(|(i, &(p, s))| (i, p, s))
+    }
+
     /// For each blocker that may meet a segment from the cell to `a`–`b` (its box meets the box
     /// of both), the highest level at which it supports a VO on `a`–`b` by rule 2 with the
     /// tighter bounds for that segment ([`Support::supports_beside`]), when it supports one.
@@ -184,10 +205,6 @@ impl<'a> Certifier<'a> {
     fn levels_beside(&self, a: DVec2, b: DVec2) -> Vec<(u32, u8)> {
         let (e0, e1, g) = self.heights;
         let dn = d_near(self.cell, &[a, b]);
-        let (lo, hi) = self
-            .cell
-            .iter()
-            .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
         // The VO tops of the levels, once, and whether they rise with the level (any frame with
         // `h_ratio >= 1`: `highest_level` then bisects).
         let vo_tops: Vec<f64> = (0..HEIGHT_LEVELS)
@@ -195,11 +212,7 @@ impl<'a> Certifier<'a> {
             .collect();
         let rising = vo_tops.windows(2).all(|w| w[0] <= w[1]);
         let mut out = Vec::new();
-        for (i, &(p, s)) in self.blockers.iter().enumerate() {
-            let (pl, ph) = self.index.bounds(i as u32);
-            if !(pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y) {
-                continue;
-            }
+        for (i, p, s) in self.near_segment(a, b) {
             let line = line_lambda(self.cell, p, a, b);
             let top_at = |dbs: f64| {
                 highest_level(
@@ -223,7 +236,7 @@ impl<'a> Certifier<'a> {
                 top_at(d_near(p, &[a, b]))
             };
             if let Some(l) = top {
-                out.push((i as u32, l));
+                out.push((i, l));
             }
         }
         out
@@ -242,18 +255,10 @@ impl<'a> Certifier<'a> {
         let (e0, e1, g) = self.heights;
         let h = self.frame.vo_top(e1, level);
         let dn = d_near(self.cell, &[a, b]);
-        let (lo, hi) = self
-            .cell
-            .iter()
-            .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
         let mut out = Vec::new();
-        for (i, &(p, s)) in self.blockers.iter().enumerate() {
-            let (pl, ph) = self.index.bounds(i as u32);
-            if !(pl.x <= hi.x && ph.x >= lo.x && pl.y <= hi.y && ph.y >= lo.y) {
-                continue;
-            }
+        for (i, p, s) in self.near_segment(a, b) {
             if s.supports_anywhere(e0, e1, g, h) {
-                out.push(i as u32);
+                out.push(i);
                 continue;
             }
             let line = line_lambda(self.cell, p, a, b);
@@ -262,7 +267,7 @@ impl<'a> Certifier<'a> {
                 .first()
                 .map_or(f64::INFINITY, |&v| point_segment_distance(v, a, b));
             if beside(d_hi) && (beside(0.0) || beside(d_near(p, &[a, b]))) {
-                out.push(i as u32);
+                out.push(i);
             }
         }
         out
