@@ -321,18 +321,30 @@ pub fn parse_reach(s: &str) -> Result<Reach, String> {
     }
 }
 
-/// Parses `bake --far-block`: `off` (or 0) for no far field, or metres from the least cell
-/// size up to [`MAX_FAR_BLOCK_M`](vocc::bake::params::MAX_FAR_BLOCK_M) (rounded to whole cells,
-/// at least one, by the bake).
-pub fn parse_far_block(s: &str) -> Result<f64, String> {
+/// `bake --far-block`: the default's blocks (split where sparse), or one side for every block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FarBlock {
+    Auto,
+    /// Metres; 0: no far field.
+    Metres(f64),
+}
+
+/// Parses `bake --far-block`: `auto`, `off` (or 0) for no far field, or metres from the least
+/// cell size up to [`MAX_FAR_BLOCK_M`](vocc::bake::params::MAX_FAR_BLOCK_M) (rounded to whole
+/// cells, at least one, by the bake).
+pub fn parse_far_block(s: &str) -> Result<FarBlock, String> {
     use vocc::bake::params::MAX_FAR_BLOCK_M;
-    if s == "off" {
-        return Ok(0.0);
+    match s {
+        "auto" => return Ok(FarBlock::Auto),
+        "off" => return Ok(FarBlock::Metres(0.0)),
+        _ => {}
     }
     match s.parse::<f64>() {
-        Ok(m) if m == 0.0 || (MIN_CELL_SIZE_M..=MAX_FAR_BLOCK_M).contains(&m) => Ok(m),
+        Ok(m) if m == 0.0 || (MIN_CELL_SIZE_M..=MAX_FAR_BLOCK_M).contains(&m) => {
+            Ok(FarBlock::Metres(m))
+        }
         _ => Err(format!(
-            "expected `off`, or metres from {MIN_CELL_SIZE_M} to {MAX_FAR_BLOCK_M}, got {s:?}"
+            "expected `auto`, `off`, or metres from {MIN_CELL_SIZE_M} to {MAX_FAR_BLOCK_M}, got {s:?}"
         )),
     }
 }

@@ -20,7 +20,7 @@ use vocc::scene;
 use crate::args::{
     parse_bytes_per_cell, parse_cell_size, parse_count, parse_count_u32, parse_effort, parse_eye,
     parse_far_block, parse_generator, parse_max_vos, parse_reach, parse_rect, parse_shard,
-    parse_slices, ReadArgs, ShardSpec,
+    parse_slices, FarBlock, ReadArgs, ShardSpec,
 };
 use crate::files::{check_output, parse, read_store, write_atomically};
 use crate::progress::Progress;
@@ -103,15 +103,17 @@ pub struct BakeArgs {
     /// "How far a cell reaches"). Every reach is equally safe.
     #[arg(long, default_value = "auto", value_parser = parse_reach, value_name = "auto|M")]
     pub reach: Reach,
-    /// The far field's blocks, metres a side (rounded to whole cells, at least one), or `off`.
-    /// The far field seeks long VOs kilometres out once per block, certified hidden from the
-    /// whole block, and offers them to its cells. Smaller blocks give each cell larger umbrae
-    /// for more bake time (on Tokyo centre, 1-cell blocks: 92.1% culled and median PVS/VS 4.08
-    /// against 90.9% and 4.38, for twice the time; README, "How far a cell reaches"); `off`
-    /// leaves the far field out (a small scene, where the cells' own reach covers it all). Every
-    /// size is equally safe.
-    #[arg(long, default_value = "400", value_parser = parse_far_block, value_name = "M|off")]
-    pub far_block: f64,
+    /// The far field's blocks: `auto` (400 m, each split into 200 m quarters where at most
+    /// 40,000 blockers lie within the far field's 3 km of it), metres a side for every block
+    /// (rounded to whole cells, at least one), or `off`. The far field seeks long VOs
+    /// kilometres out once per block, certified hidden from the whole block, and offers them to
+    /// its cells. Smaller blocks give each cell larger umbrae for more bake time (on Tokyo
+    /// centre, every cell: 1-cell blocks 91.5% culled and median PVS/VS 4.37 against 91.3% and
+    /// 4.50 for `auto`, for 1.7 times the time; README, "How far a cell reaches"); `off` leaves
+    /// the far field out (a small scene, where the cells' own reach covers it all). Every size
+    /// is equally safe.
+    #[arg(long, default_value = "auto", value_parser = parse_far_block, value_name = "auto|M|off")]
+    pub far_block: FarBlock,
     /// Which generator proposes the VOs: `long` (long hidden runs of lines, the default) or
     /// `growth` (aggregate umbrae grown from single buildings, the generator before 0.2; kept as a
     /// measured baseline).
@@ -228,7 +230,10 @@ pub fn run(a: BakeArgs) -> Result<()> {
         ..BakeParams::default()
             .with_effort(a.effort)
             .with_reach_for(a.reach, &s)
-            .with_far_block(a.far_block)
+    };
+    let params = match a.far_block {
+        FarBlock::Metres(m) => params.with_far_block(m),
+        FarBlock::Auto => params,
     };
     let reach_m = params.search_m;
     if a.reach == Reach::Auto && reach_m > vocc::bake::params::SEARCH_M {

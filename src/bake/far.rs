@@ -15,10 +15,15 @@
 //! Why per block: a far VO hides what lies behind it from every neighbouring cell alike, and
 //! certifying a kilometre of it costs as much as the cell's own search; sought per block its
 //! cost is shared by the block's cells, and the cells' own search keeps its near reach.
-//! Invariants: a block's pieces depend on the plan and the block alone (deterministic, whatever
-//! cell asks first); each piece's quad, from the block's ground to its top, is hidden from the
-//! block's whole eye range, which holds the eye range of each of its cells, so a cell's VO
-//! standing on the cell's ground (no lower) up to a top no higher is a part of it.
+//! Sparse blocks split: a block among few blockers ([`super::params::FarParams::split_blockers`])
+//! seeks its far field per quarter instead ([`Blocks::quarter`]): a smaller region sees more of
+//! the scene hidden from all of it, and there the search costs little. Whether a block splits
+//! depends on the blockers around it alone ([`super::plan::Plan::block_splits`]).
+//! Invariants: a block's (or quarter's) pieces depend on the plan and its cells alone
+//! (deterministic, whatever cell asks first); each piece's quad, from the region's ground to its
+//! top, is hidden from the region's whole eye range, which holds the eye range of each of its
+//! cells, so a cell's VO standing on the cell's ground (no lower) up to a top no higher is a part
+//! of it.
 
 use glam::DVec2;
 
@@ -81,20 +86,71 @@ impl Blocks {
     pub fn of(&self, i: u32, j: u32) -> usize {
         (j / self.side) as usize * self.nx as usize + (i / self.side) as usize
     }
+
+    /// The cells of block `block` on a grid of `gnx` by `gny` cells, as half-open index ranges
+    /// `[i0, i1) x [j0, j1)` (the last blocks of a row or column may be cut by the grid).
+    pub fn cells(&self, block: usize, gnx: u32, gny: u32) -> CellRange {
+        if self.side == 0 || self.nx == 0 {
+            return CellRange::default();
+        }
+        let (bi, bj) = (
+            (block % self.nx as usize) as u32,
+            (block / self.nx as usize) as u32,
+        );
+        let (i0, j0) = (bi * self.side, bj * self.side);
+        CellRange {
+            i0,
+            j0,
+            i1: (i0 + self.side).min(gnx),
+            j1: (j0 + self.side).min(gny),
+        }
+    }
+
+    /// Whether blocks can split into quarters: at least 2 cells a side.
+    pub fn can_split(&self) -> bool {
+        self.side >= 2
+    }
+
+    /// The quarter of block `cells` (its cell range, [`Self::cells`]) that holds cell `(i, j)`,
+    /// and its number `0..4` (row-major: south-west, south-east, north-west, north-east): the
+    /// block cut after its first `ceil(side / 2)` cells each way, the cut parts clipped to the
+    /// grid's.
+    pub fn quarter(&self, cells: CellRange, i: u32, j: u32) -> (usize, CellRange) {
+        let h = self.side.div_ceil(2);
+        let (xi, yj) = (cells.i0 + h, cells.j0 + h);
+        let (east, north) = (i >= xi, j >= yj);
+        let range = CellRange {
+            i0: if east { xi } else { cells.i0 },
+            i1: if east { cells.i1 } else { xi.min(cells.i1) },
+            j0: if north { yj } else { cells.j0 },
+            j1: if north { cells.j1 } else { yj.min(cells.j1) },
+        };
+        (east as usize + 2 * north as usize, range)
+    }
 }
 
-/// The far pieces of block `block` ([`Plan::far_pieces`] caches them).
-pub(super) fn block_pieces(plan: &Plan, block: usize) -> Vec<FarPiece> {
+/// Cells `[i0, i1) x [j0, j1)` of a grid: a block or a quarter of one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CellRange {
+    pub i0: u32,
+    pub j0: u32,
+    pub i1: u32,
+    pub j1: u32,
+}
+
+impl CellRange {
+    pub fn is_empty(&self) -> bool {
+        self.i0 >= self.i1 || self.j0 >= self.j1
+    }
+}
+
+/// The far pieces of the region of cells `cells`, a block or a quarter of one
+/// ([`Plan::far_pieces`] caches them).
+pub(super) fn block_pieces(plan: &Plan, cells: CellRange) -> Vec<FarPiece> {
     let far = &plan.params.far;
-    let bl = plan.blocks;
     let g = &plan.frame.grid;
-    let (bi, bj) = (
-        (block % bl.nx as usize) as u32,
-        (block / bl.nx as usize) as u32,
-    );
-    let (i0, j0) = (bi * bl.side, bj * bl.side);
-    let (i1, j1) = ((i0 + bl.side).min(g.nx), (j0 + bl.side).min(g.ny));
-    if i0 >= i1 || j0 >= j1 {
+    let CellRange { i0, j0, i1, j1 } = cells;
+    if cells.is_empty() {
         return Vec::new();
     }
     // The block's ground: the lowest of its cells' grounds, and the highest of their eyes'.
@@ -258,5 +314,98 @@ mod tests {
         assert_eq!((b.side, b.nx, b.ny), (1, 3, 2));
         // Off.
         assert_eq!(Blocks::new(3, 2, 100.0, 0.0).side, 0);
+    }
+
+    #[test]
+    fn a_block_s_quarters_tile_its_cells_clipped_to_the_grid() {
+        // 4-cell blocks on a 6 x 5 grid: block 1 is cut to cells 4..6 by 0..4.
+        let b = Blocks::new(6, 5, 100.0, 400.0);
+        let r = |i0, j0, i1, j1| CellRange { i0, j0, i1, j1 };
+        assert_eq!(b.cells(0, 6, 5), r(0, 0, 4, 4));
+        assert_eq!(b.cells(1, 6, 5), r(4, 0, 6, 4));
+        assert_eq!(b.cells(3, 6, 5), r(4, 4, 6, 5));
+        let whole = b.cells(0, 6, 5);
+        assert_eq!(b.quarter(whole, 0, 0), (0, r(0, 0, 2, 2)));
+        assert_eq!(b.quarter(whole, 3, 1), (1, r(2, 0, 4, 2)));
+        assert_eq!(b.quarter(whole, 1, 2), (2, r(0, 2, 2, 4)));
+        assert_eq!(b.quarter(whole, 3, 3), (3, r(2, 2, 4, 4)));
+        // Every cell of a cut block lies in exactly the quarter it names, and the quarters
+        // that hold cells cover the block.
+        for block in 0..b.count() {
+            let c = b.cells(block, 6, 5);
+            let mut cells = 0;
+            for q in 0..4 {
+                let mut seen = None;
+                for j in c.j0..c.j1 {
+                    for i in c.i0..c.i1 {
+                        let (k, range) = b.quarter(c, i, j);
+                        if k == q {
+                            assert!((range.i0..range.i1).contains(&i));
+                            assert!((range.j0..range.j1).contains(&j));
+                            assert!(seen.is_none_or(|s| s == range), "one range per quarter");
+                            seen = Some(range);
+                            cells += 1;
+                        }
+                    }
+                }
+                if let Some(s) = seen {
+                    assert!(!s.is_empty());
+                }
+            }
+            assert_eq!(cells, (c.i1 - c.i0) * (c.j1 - c.j0));
+        }
+        // An odd side: the first part takes the larger half.
+        let b = Blocks::new(3, 3, 100.0, 300.0);
+        assert_eq!(b.quarter(b.cells(0, 3, 3), 1, 1), (0, r(0, 0, 2, 2)));
+        assert_eq!(b.quarter(b.cells(0, 3, 3), 2, 0), (1, r(2, 0, 3, 2)));
+        // One-cell blocks do not split.
+        assert!(!Blocks::new(3, 3, 100.0, 100.0).can_split());
+    }
+
+    /// A block splits when the blockers around it (its square grown by the far field's reach)
+    /// number at most `split_blockers`; a fixed side (`--far-block M`) never splits; a cell's
+    /// far pieces then come from its quarter.
+    #[test]
+    fn a_block_splits_where_few_blockers_lie_around_it() {
+        use crate::bake::params::BakeParams;
+        // 30 m squares every 40 m over 1,200 by 800 m, 20 m tall: 600 blockers.
+        let items: Vec<([f64; 3], f64, f64)> = (0..600)
+            .map(|k| {
+                (
+                    [(k % 30) as f64 * 40.0, (k / 30) as f64 * 40.0, 30.0],
+                    0.0,
+                    20.0,
+                )
+            })
+            .collect();
+        let scene = crate::testutil::squares(&items);
+        let with = |split: usize| {
+            let mut p = BakeParams {
+                search_m: 300.0,
+                weigh_m: 1500.0,
+                ..BakeParams::default()
+            };
+            p.far.split_blockers = split;
+            p
+        };
+        let plan = Plan::new(&scene, with(600)).unwrap();
+        assert!(plan.blocks.count() > 1);
+        assert!((0..plan.blocks.count()).all(|b| plan.block_splits(b)));
+        let plan = Plan::new(&scene, with(599)).unwrap();
+        assert!((0..plan.blocks.count()).all(|b| !plan.block_splits(b)));
+        let plan = Plan::new(&scene, with(600).with_far_block(400.0)).unwrap();
+        assert!((0..plan.blocks.count()).all(|b| !plan.block_splits(b)));
+        // Split: two cells of one quarter share their pieces, which the quarter's own search
+        // gives; cells of another quarter get that quarter's.
+        let plan = Plan::new(&scene, with(600)).unwrap();
+        let g = &plan.frame.grid;
+        let cells = plan.blocks.cells(0, g.nx, g.ny);
+        let (_, q) = plan.blocks.quarter(cells, 0, 0);
+        assert!(!plan.far_pieces(0).is_empty());
+        assert_eq!(plan.far_pieces(0), block_pieces(&plan, q).as_slice());
+        assert_eq!(plan.far_pieces(1), plan.far_pieces(0));
+        let (_, q2) = plan.blocks.quarter(cells, 2, 0);
+        assert_ne!(q, q2);
+        assert_eq!(plan.far_pieces(2), block_pieces(&plan, q2).as_slice());
     }
 }

@@ -545,7 +545,7 @@ mod tests {
     /// The options' text the global hash takes, for the default bake, pinned: a change to it
     /// makes every old `.hashes` file refuse reuse (which a bake then says), so it is made on
     /// purpose (the far field, issue 31, changed it, then the store's byte budget, then the far
-    /// field's certification budget).
+    /// field's certification budget, then its sparse blocks' split).
     #[test]
     fn the_options_key_keeps_its_layout() {
         let p = BakeParams::default();
@@ -557,7 +557,7 @@ mod tests {
              ProposeParams { directions: 16, spacing: 32.0, step: 2, max_offset: 900.0, \
              min_len: 60.0, per_direction: 1 }, 25, FarParams { block_m: 400.0, \
              reach_m: 3000.0, px: 12.0, spacing_m: 64.0, min_len_m: 120.0, budget: 24, \
-             keep: 12, full_budget_blockers: 40000 })"
+             keep: 12, full_budget_blockers: 40000, split_blockers: 40000 })"
         );
     }
 

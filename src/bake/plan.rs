@@ -153,11 +153,16 @@ pub struct Plan<'s> {
     pub occludees: Occludees,
     /// On a terrain, every cell's ground level and whether its eyes fit the frame.
     pub ground: Option<super::terrain::GroundTable>,
-    /// The blocks of cells the far field is sought for ([`super::far`]), and each block's far
-    /// pieces, found when a cell of it first asks.
+    /// The blocks of cells the far field is sought for ([`super::far`]); for each block,
+    /// whether it splits into quarters, and the far pieces of the whole block and of each
+    /// quarter (`FAR_SLOTS` a block), each found when a cell of it first asks.
     pub blocks: Blocks,
+    splits: Vec<OnceLock<bool>>,
     far: Vec<OnceLock<Vec<FarPiece>>>,
 }
+
+/// A block's cached far pieces: the whole block's, then its four quarters'.
+const FAR_SLOTS: usize = 5;
 
 fn pow2_at_least(x: f64) -> f64 {
     let mut q = 1.0f64 / 1024.0;
@@ -288,20 +293,66 @@ impl<'s> Plan<'s> {
             base,
             top,
             occludees: Occludees::from_scene(scene),
-            far: (0..blocks.count()).map(|_| OnceLock::new()).collect(),
+            splits: (0..blocks.count()).map(|_| OnceLock::new()).collect(),
+            far: (0..blocks.count() * FAR_SLOTS)
+                .map(|_| OnceLock::new())
+                .collect(),
             blocks,
             params,
             ground,
         })
     }
 
-    /// The far pieces of the block of cell `id` ([`super::far`]): sought when a cell of the
-    /// block first asks, the same whatever cell that is; none without blocks.
+    /// The far pieces of the block of cell `id`, or of its quarter that holds the cell where
+    /// the block splits ([`super::far`]): sought when a cell of that region first asks, the
+    /// same whatever cell that is; none without blocks.
     pub fn far_pieces(&self, id: CellId) -> &[FarPiece] {
-        match self.block_of(id).and_then(|b| Some((b, self.far.get(b)?))) {
-            Some((b, slot)) => slot.get_or_init(|| super::far::block_pieces(self, b)),
+        let Some(b) = self.block_of(id) else {
+            return &[];
+        };
+        let g = &self.frame.grid;
+        let cells = self.blocks.cells(b, g.nx, g.ny);
+        let (k, region) = if self.block_splits(b) {
+            let (q, r) = self.blocks.quarter(cells, id % g.nx, id / g.nx);
+            (1 + q, r)
+        } else {
+            (0, cells)
+        };
+        match self.far.get(b * FAR_SLOTS + k) {
+            Some(slot) => slot.get_or_init(|| super::far::block_pieces(self, region)),
             None => &[],
         }
+    }
+
+    /// Whether block `b` seeks its far field per quarter: it has at least 2 cells a side, and
+    /// its square grown by the far field's reach each way meets at most
+    /// [`super::params::FarParams::split_blockers`] blockers' boxes (the blockers around it
+    /// alone decide, so an edit beyond the block's reach never changes it).
+    pub fn block_splits(&self, b: usize) -> bool {
+        let far = &self.params.far;
+        if far.split_blockers == 0 || !self.blocks.can_split() {
+            return false;
+        }
+        let Some(slot) = self.splits.get(b) else {
+            return false;
+        };
+        *slot.get_or_init(|| {
+            let g = &self.frame.grid;
+            let c = self.blocks.cells(b, g.nx, g.ny);
+            if c.is_empty() {
+                return false;
+            }
+            let r = far.reach_m;
+            let lo = DVec2::new(
+                g.min_x + c.i0 as f64 * g.cell_size - r,
+                g.min_y + c.j0 as f64 * g.cell_size - r,
+            );
+            let hi = DVec2::new(
+                g.min_x + c.i1 as f64 * g.cell_size + r,
+                g.min_y + c.j1 as f64 * g.cell_size + r,
+            );
+            self.set.in_box(lo, hi).take(far.split_blockers + 1).count() <= far.split_blockers
+        })
     }
 
     /// The far-field block of cell `id`; none without blocks or outside the grid.

@@ -183,11 +183,12 @@ fn assert_refused(
     }
 }
 
-/// Issue 31, the far field's blocks: `vocc bake --far-block 400` is the default bake byte for
-/// byte; 1-cell blocks and `off` bake other stores; a size out of range is a usage error naming
-/// the range, with no store written.
+/// Issue 31, the far field's blocks: `vocc bake --far-block auto` is the default bake byte for
+/// byte, and so is `--far-block 200` on Lyon, whose 400 m blocks all split into 200 m quarters
+/// (fewer than 40,000 blockers around each); 400 m blocks unsplit, 1-cell blocks and `off` bake
+/// other stores; a size out of range is a usage error naming the range, with no store written.
 #[test]
-fn bake_far_block_400_is_the_default_and_out_of_range_is_refused() {
+fn bake_far_block_auto_is_the_default_and_out_of_range_is_refused() {
     let dir = common::temp_dir("cli-bake-far-block");
     let default = std::fs::read(bake_lyon_region(&dir)).unwrap();
     let bake = |block: &str, name: &str| {
@@ -198,7 +199,9 @@ fn bake_far_block_400_is_the_default_and_out_of_range_is_refused() {
         )
     };
     for (block, name, same) in [
-        ("400", "same.vocc", true),
+        ("auto", "auto.vocc", true),
+        ("200", "quarters.vocc", true),
+        ("400", "whole.vocc", false),
         ("100", "cells.vocc", false),
         ("off", "off.vocc", false),
     ] {
@@ -216,6 +219,6 @@ fn bake_far_block_400_is_the_default_and_out_of_range_is_refused() {
         "--far-block",
         &bake,
         ["0.5", "20000", "near"],
-        "expected `off`, or metres from 1 to 10000",
+        "expected `auto`, `off`, or metres from 1 to 10000",
     );
 }
