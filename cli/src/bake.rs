@@ -378,9 +378,17 @@ fn print_summary(sum: &BakeSummary, load_s: f64, output: &std::path::Path) {
         let parts: Vec<String> = vocc::bake::plan::STAGES
             .iter()
             .filter_map(|k| {
-                sum.stages_s
-                    .get(*k)
-                    .map(|s| format!("{} {s:.1} s", k.replace('_', " ")))
+                let s = sum.stages_s.get(*k)?;
+                let [whole, quarters] = sum.far_searches;
+                Some(if *k == "far_field" && whole + quarters > 0 {
+                    format!(
+                        "far field {s:.1} s ({} whole, {} of blocks split among few blockers)",
+                        plural(whole, "block", "blocks"),
+                        plural(quarters, "quarter", "quarters")
+                    )
+                } else {
+                    format!("{} {s:.1} s", k.replace('_', " "))
+                })
             })
             .collect();
         eprintln!("time by stage, summed over cells: {}", parts.join(", "));

@@ -239,6 +239,9 @@ pub struct BakeSummary {
     /// CPU seconds of the long generator's stages, summed over the baked cells, by name
     /// ([`super::plan::STAGES`]): where a bake spends its time (empty under the growth).
     pub stages_s: BTreeMap<String, f64>,
+    /// The far field's searches: `[whole blocks, quarters of blocks split among few blockers]`
+    /// (`Plan::far_searches`; README, "How far a cell reaches").
+    pub far_searches: [usize; 2],
     /// Worker threads the cells were baked on.
     pub threads: usize,
     pub timings: Timings,
@@ -527,6 +530,7 @@ impl<'s> BakeJob<'s> {
             ms_per_cell_p95: pct(0.95),
             quantization,
             stages_s,
+            far_searches: plan.far_searches(),
             threads,
             timings,
             store_bytes: store.len(),

@@ -324,6 +324,18 @@ impl<'s> Plan<'s> {
         }
     }
 
+    /// The far-field searches this plan has run: `[whole blocks, quarters of split blocks]`
+    /// (each runs once, when a cell of it first asks).
+    pub fn far_searches(&self) -> [usize; 2] {
+        let mut n = [0, 0];
+        for (k, slot) in self.far.iter().enumerate() {
+            if slot.get().is_some() {
+                n[usize::from(k % FAR_SLOTS != 0)] += 1;
+            }
+        }
+        n
+    }
+
     /// Whether block `b` seeks its far field per quarter: it has at least 2 cells a side, and
     /// its square grown by the far field's reach each way meets at most
     /// [`super::params::FarParams::split_blockers`] blockers' boxes (the blockers around it

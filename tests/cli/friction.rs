@@ -132,6 +132,11 @@ fn bake_json_summary_carries_cells_vos_timings_bytes_and_skipped_objects() {
         sum > 0.0 && sum <= budget * 1.01 + 1e-3,
         "{sum} s of stages in {budget} s: {v}"
     );
+    // The far field: this small scene's one block of 8 x 8 cells lies among few blockers, so
+    // it is sought per quarter (4 x 4 cells).
+    let far = &v["far_searches"];
+    assert_eq!(far[0], 0, "{v}");
+    assert!((1..=4).contains(&far[1].as_u64().unwrap()), "{v}");
     assert_eq!(v["scene"]["skipped"], 1, "{v}");
     assert_eq!(
         v["scene"]["skipped_by_reason"]["no height attribute and no storey count"], 1,

@@ -52,6 +52,12 @@ fn bake_lyon_region(dir: &std::path::Path) -> std::path::PathBuf {
         err.contains("time by stage, summed over cells: maps ") && err.contains(", selection "),
         "{err}"
     );
+    // Lyon's blocks lie among few blockers: the far field is sought per quarter, and the stage
+    // line says how often.
+    assert!(
+        err.contains("(0 blocks whole, ") && err.contains(" of blocks split among few blockers)"),
+        "{err}"
+    );
     store
 }
 
