@@ -180,7 +180,7 @@ impl<'a> Certifier<'a> {
     /// box of both and lies wholly outside no edge of their convex hull, by a millimetre's
     /// margin (the others meet no such segment), as (index into `blockers`, polygon, support),
     /// ascending by index. The hull's test leaves out most of the box of a far, slanting
-    /// proposal: 0.92 of Tokyo centre's bake CPU, stores byte for byte the same.
+    /// proposal: 0.93 of Tokyo centre's bake CPU, stores byte for byte the same.
     fn near_segment(
         &self,
         a: DVec2,
