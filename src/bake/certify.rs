@@ -27,7 +27,7 @@ use super::far::FarPiece;
 use super::quantize::{quantize, Refused};
 use super::slice::{d_near, line_lambda, point_segment_distance, Support};
 use crate::geom::predicates::point_in_umbra;
-use crate::geom::verify::{BlockerIndex, Verifier};
+use crate::geom::verify::{sight_filter, BlockerIndex, Verifier};
 use crate::runtime::frame::{Frame, QVo, VoGeom, HEIGHT_LEVELS};
 use crate::runtime::grid::CellId;
 
@@ -177,72 +177,27 @@ impl<'a> Certifier<'a> {
     }
 
     /// The blockers that may meet a segment from the cell to `a`–`b`: those whose box meets the
-    /// box of both and lies wholly outside no edge of their convex hull, by a millimetre's
-    /// margin (the others meet no such segment), as (index into `blockers`, polygon, support),
-    /// ascending by index. The hull's test leaves out most of the box of a far, slanting
-    /// proposal: 0.93 of Tokyo centre's bake CPU, stores byte for byte the same.
+    /// convex hull of both ([`sight_filter`], the verifier's own filter; the others meet no such
+    /// segment), as (index into `blockers`, polygon, support), ascending by index. The hull
+    /// leaves out most of the box of a far, slanting proposal: 0.93 of Tokyo centre's bake CPU
+    /// against the box of both, stores byte for byte the same.
     fn near_segment(
         &self,
         a: DVec2,
         b: DVec2,
     ) -> impl Iterator<Item = (u32, &'a [DVec2], Support)> + '_ {
-        let (lo, hi) = self
-            .cell
-            .iter()
-            .fold((a.min(b), a.max(b)), |(l, u), v| (l.min(*v), u.max(*v)));
-        // The hull of the cell and the segment, counter-clockwise: a blocker whose box lies
-        // wholly outside one of its edges meets no segment from the cell to `a`-`b`.
-        let mut pts: Vec<DVec2> = self.cell.iter().copied().chain([a, b]).collect();
-        pts.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
-        let mut hull: Vec<DVec2> = Vec::with_capacity(12);
-        for pass in 0..2 {
-            let start = hull.len();
-            let it: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
-                Box::new(pts.iter())
-            } else {
-                Box::new(pts.iter().rev())
-            };
-            for &p in it {
-                while hull.len() >= start + 2
-                    && (hull[hull.len() - 1] - hull[hull.len() - 2])
-                        .perp_dot(p - hull[hull.len() - 2])
-                        <= 0.0
-                {
-                    hull.pop();
-                }
-                hull.push(p);
-            }
-            hull.pop();
-        }
-        let edges: Vec<(DVec2, DVec2, f64)> = (0..hull.len())
-            .map(|k| {
-                let (p, q) = (hull[k], hull[(k + 1) % hull.len()]);
-                let e = q - p;
-                let n = DVec2::new(e.y, -e.x);
-                (p, n, 1e-6 * n.length() * (1.0 + p.abs().max_element()))
-            })
-            .collect();
+        let may_meet = sight_filter(self.cell, a, b);
         (0u32..)
             .zip(&self.blockers)
             .filter(move |&(i, _)| {
                 let (pl, ph) = self.index.bounds(i);
-                pl.x <= hi.x
-                    && ph.x >= lo.x
-                    && pl.y <= hi.y
-                    && ph.y >= lo.y
-                    && edges.iter().all(|&(p, n, tol)| {
-                        let c = DVec2::new(
-                            if n.x > 0.0 { pl.x } else { ph.x },
-                            if n.y > 0.0 { pl.y } else { ph.y },
-                        );
-                        n.dot(c - p) <= tol
-                    })
+                may_meet(pl, ph)
             })
             .map(|(i, &(p, s))| (i, p, s))
     }
 
-    /// For each blocker that may meet a segment from the cell to `a`–`b` (its box meets the box
-    /// of both), the highest level at which it supports a VO on `a`–`b` by rule 2 with the
+    /// For each blocker that may meet a segment from the cell to `a`–`b` (`near_segment`), the
+    /// highest level at which it supports a VO on `a`–`b` by rule 2 with the
     /// tighter bounds for that segment ([`Support::supports_beside`]), when it supports one.
     /// As `(index into blockers, level)`, ascending by index (the verifiers built from it list
     /// their blockers in a fixed order).

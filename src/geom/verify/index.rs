@@ -392,6 +392,19 @@ fn clear_of(hull: &[DVec2]) -> impl Fn(DVec2, DVec2) -> bool {
     }
 }
 
+/// The float filter of [`Verifier::near`] for callers that list blockers themselves:
+/// `may_meet(lo, hi)` is false only when the box `[lo, hi]` lies outside the bounding box of the
+/// convex hull of `cell` and `[a, b]`, or wholly beyond one of the hull's edges by a margin
+/// ([`clear_of`]); every segment from the cell to `[a, b]` lies in that hull.
+pub fn sight_filter(cell: &[DVec2], a: DVec2, b: DVec2) -> impl Fn(DVec2, DVec2) -> bool {
+    let hull = convex_hull(cell.iter().copied().chain([a, b]));
+    let (lo, hi) = bbox(&hull);
+    let clear = clear_of(&hull);
+    move |bl: DVec2, bh: DVec2| {
+        !(bl.x > hi.x || bh.x < lo.x || bl.y > hi.y || bh.y < lo.y || clear(bl, bh))
+    }
+}
+
 /// Convex hull, counter-clockwise, without collinear points (Andrew's monotone chain with exact
 /// orientation tests).
 pub(super) fn convex_hull(pts: impl Iterator<Item = DVec2>) -> Vec<DVec2> {

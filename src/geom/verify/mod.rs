@@ -113,7 +113,7 @@ use glam::DVec2;
 pub use cache::{CACHE_BUCKET_M, CACHE_ENOUGH_M, CACHE_REACH_M, CACHE_TRIES};
 pub use certificate::exact_midpoint;
 pub use chain::NEAREST_FIRST;
-pub use index::BlockerIndex;
+pub use index::{sight_filter, BlockerIndex};
 pub use index::{ALONG_PAD_M, NEAREST_SORTED, NEAR_AHEAD_M};
 
 use cache::CertCache;
