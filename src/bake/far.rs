@@ -37,7 +37,7 @@ use super::select::{select, Candidate, Stage};
 use super::spans::Spans;
 use crate::geom::verify::BlockerIndex;
 use crate::runtime::frame::{CellGround, CellView, VoGeom};
-use crate::runtime::grid::CellId;
+use crate::runtime::grid::{CellId, GridDescriptor};
 
 /// A segment certified hidden from a whole block, standing from `bottom` (the block's lowest
 /// ground) up to `top` (metres, local frame).
@@ -142,6 +142,16 @@ impl CellRange {
     pub fn is_empty(&self) -> bool {
         self.i0 >= self.i1 || self.j0 >= self.j1
     }
+
+    /// The region's rectangle on grid `g`, `[x0, y0, x1, y1]` (local frame).
+    pub fn rect(&self, g: &GridDescriptor) -> [f64; 4] {
+        [
+            g.min_x + self.i0 as f64 * g.cell_size,
+            g.min_y + self.j0 as f64 * g.cell_size,
+            g.min_x + self.i1 as f64 * g.cell_size,
+            g.min_y + self.j1 as f64 * g.cell_size,
+        ]
+    }
 }
 
 /// The far pieces of the region of cells `cells`, a block or a quarter of one
@@ -171,12 +181,7 @@ pub(super) fn block_pieces(plan: &Plan, cells: CellRange) -> Vec<FarPiece> {
         return Vec::new();
     }
     let f = &plan.frame;
-    let rect = [
-        g.min_x + i0 as f64 * g.cell_size,
-        g.min_y + j0 as f64 * g.cell_size,
-        g.min_x + i1 as f64 * g.cell_size,
-        g.min_y + j1 as f64 * g.cell_size,
-    ];
+    let rect = cells.rect(g);
     let poly = [
         DVec2::new(rect[0], rect[1]),
         DVec2::new(rect[2], rect[1]),

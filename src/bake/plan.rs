@@ -354,16 +354,13 @@ impl<'s> Plan<'s> {
             if c.is_empty() {
                 return false;
             }
-            let r = far.reach_m;
-            let lo = DVec2::new(
-                g.min_x + c.i0 as f64 * g.cell_size - r,
-                g.min_y + c.j0 as f64 * g.cell_size - r,
-            );
-            let hi = DVec2::new(
-                g.min_x + c.i1 as f64 * g.cell_size + r,
-                g.min_y + c.j1 as f64 * g.cell_size + r,
-            );
-            self.set.in_box(lo, hi).take(far.split_blockers + 1).count() <= far.split_blockers
+            let [x0, y0, x1, y1] = c.rect(g);
+            let r = DVec2::splat(far.reach_m);
+            self.set
+                .in_box(DVec2::new(x0, y0) - r, DVec2::new(x1, y1) + r)
+                .take(far.split_blockers + 1)
+                .count()
+                <= far.split_blockers
         })
     }
 
